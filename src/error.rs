@@ -1,0 +1,51 @@
+//! The one error type of the numerical core.
+//!
+//! Bad input names the field at fault so that the command line can print it and the service can put
+//! it in a problem+json `errors[]` entry without parsing strings.
+
+use std::fmt;
+
+/// What went wrong in the numerical core.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Error {
+    /// The caller supplied something unusable; `field` names it (`stiffness`, `inputs.wind_speed`, ...).
+    Invalid { field: String, reason: String },
+    /// The computation itself failed on valid input (a diverging free run, a failed factorisation).
+    Numerical(String),
+    /// The caller asked the work to stop.
+    Cancelled,
+}
+
+impl Error {
+    pub fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
+        Error::Invalid { field: field.into(), reason: reason.into() }
+    }
+}
+
+impl fmt::Display for Error {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Error::Invalid { field, reason } => write!(f, "{field}: {reason}"),
+            Error::Numerical(message) => write!(f, "numerical failure: {message}"),
+            Error::Cancelled => write!(f, "cancelled"),
+        }
+    }
+}
+
+impl std::error::Error for Error {}
+
+pub type Result<T> = std::result::Result<T, Error>;
+
+/// Refuses a value that is NaN or infinite.
+pub fn require_finite(field: &str, value: f64) -> Result<f64> {
+    if value.is_finite() { Ok(value) } else { Err(Error::invalid(field, format!("must be a finite number, got {value}"))) }
+}
+
+/// Refuses a value that is not finite and strictly positive.
+pub fn require_positive(field: &str, value: f64) -> Result<f64> {
+    if value.is_finite() && value > 0.0 {
+        Ok(value)
+    } else {
+        Err(Error::invalid(field, format!("must be a finite positive number, got {value}")))
+    }
+}

@@ -1,0 +1,10 @@
+//! windmeta: rapid uncertainty quantification of tall buildings under stochastic wind.
+//!
+//! The numerical core follows the data's way through the method: a [`structure`] reduced to its
+//! first modes, [`wind`] loads simulated by spectral representation, [`dynamics`] of the damped
+//! building as the reference model, [`uncertainty`] in the inputs, and the [`problem`] that ties a
+//! structure, its inputs and its storms together. Everything here is synchronous and deterministic
+//! for a given seed.
+
+pub mod error;
+pub mod structure;
