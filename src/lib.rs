@@ -9,3 +9,4 @@
 pub mod error;
 pub mod structure;
 pub mod uncertainty;
+pub mod wind;

@@ -1,0 +1,14 @@
+//! Stochastic wind loads (section 4.2 and Appendix 1): the mean speed profile, the Kaimal-type
+//! spectrum with Davenport coherence, Deodatis' spectral-representation simulation, quasi-steady
+//! floor forces and modal forces — either projected from the full floor field or simulated directly
+//! from the projected cross-spectral matrix Φᵀ S_f Φ (the fast path, equal in law).
+
+mod forces;
+mod site;
+mod spectral;
+mod spectrum;
+
+pub use forces::{FloorForces, ModalForces, WindLoads};
+pub use site::{StormGrid, WindSite};
+pub use spectral::{simulate, CrossSpectralDensity, SpectralGrid};
+pub use spectrum::{FieldSpectrum, ProjectedSpectrum};

@@ -1,0 +1,165 @@
+//! Site and discretisation parameters of the wind model, with the paper's values as defaults.
+
+use crate::error::{require_positive, Error, Result};
+use serde::{Deserialize, Serialize};
+use std::f64::consts::PI;
+
+/// Everything about the wind that is not uncertain. Defaults are the paper's (section 4.2, App. 1).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct WindSite {
+    /// Roughness length at the site, z₀ (m).
+    pub site_roughness_m: f64,
+    /// Roughness length at the meteorological station, z₀₁ (m).
+    pub station_roughness_m: f64,
+    /// Height of the station's anemometer, H_met (m).
+    pub station_height_m: f64,
+    /// β of Eq. (20).
+    pub shear_factor: f64,
+    /// Von Kármán's constant k_a.
+    pub von_karman: f64,
+    /// C_z of the coherence, Eq. (22).
+    pub coherence_decay: f64,
+    /// Air density ρ (kg/m³).
+    pub air_density_kg_m3: f64,
+    /// Quasi-steady pressure coefficient C̄.
+    pub pressure_coefficient: f64,
+    /// Cut-off frequency ω_up (rad/s); the wind has no energy above 2π rad/s.
+    pub cutoff_rad_s: f64,
+    /// Frequencies per component, N (81 920 phases for 40 floors means 2048).
+    pub frequencies: usize,
+    /// Time step on which the full floor field is generated before cubic interpolation to the
+    /// storm's time step (s); it must resolve the cut-off: ≤ π/ω_up.
+    pub field_generation_step_s: f64,
+}
+
+impl Default for WindSite {
+    fn default() -> Self {
+        WindSite {
+            site_roughness_m: 0.02,
+            station_roughness_m: 0.05,
+            station_height_m: 10.0,
+            shear_factor: 0.65,
+            von_karman: 0.4,
+            coherence_decay: 10.0,
+            air_density_kg_m3: 1.25,
+            pressure_coefficient: 1.3,
+            cutoff_rad_s: 2.0 * PI,
+            frequencies: 2048,
+            field_generation_step_s: 0.1,
+        }
+    }
+}
+
+impl WindSite {
+    pub fn validate(&self) -> Result<()> {
+        require_positive("wind.site_roughness_m", self.site_roughness_m)?;
+        require_positive("wind.station_roughness_m", self.station_roughness_m)?;
+        require_positive("wind.station_height_m", self.station_height_m)?;
+        if self.station_height_m <= self.station_roughness_m {
+            return Err(Error::invalid("wind.station_height_m", "must exceed the station's roughness length"));
+        }
+        require_positive("wind.shear_factor", self.shear_factor)?;
+        require_positive("wind.von_karman", self.von_karman)?;
+        require_positive("wind.coherence_decay", self.coherence_decay)?;
+        require_positive("wind.air_density_kg_m3", self.air_density_kg_m3)?;
+        require_positive("wind.pressure_coefficient", self.pressure_coefficient)?;
+        require_positive("wind.cutoff_rad_s", self.cutoff_rad_s)?;
+        if !(16..=1 << 16).contains(&self.frequencies) {
+            return Err(Error::invalid("wind.frequencies", format!("must be between 16 and 65536, got {}", self.frequencies)));
+        }
+        require_positive("wind.field_generation_step_s", self.field_generation_step_s)?;
+        if self.field_generation_step_s > PI / self.cutoff_rad_s {
+            return Err(Error::invalid(
+                "wind.field_generation_step_s",
+                format!("must resolve the cut-off frequency: at most π/ω_up = {:.4} s", PI / self.cutoff_rad_s),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Mean hourly speed at height z (m) for a station speed v̄ (Eq. 13).
+    pub fn mean_speed(&self, z: f64, station_speed: f64) -> f64 {
+        let (z0, z01) = (self.site_roughness_m, self.station_roughness_m);
+        0.8065 * (z0 / z01).powf(0.0706) * (z / z0).ln() / (self.station_height_m / z01).ln() * station_speed
+    }
+
+    /// Shear velocity v* (Eq. 20), with v̄₁₀ the site's own mean speed at 10 m from Eq. (13).
+    pub fn shear_velocity(&self, station_speed: f64) -> f64 {
+        let v10 = self.mean_speed(10.0, station_speed);
+        v10 * self.shear_factor * self.von_karman / (10.0 / self.site_roughness_m).ln()
+    }
+}
+
+/// The time grid of one storm: `steps()` instants 0, Δt, …, T.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StormGrid {
+    pub duration: f64,
+    pub time_step: f64,
+}
+
+/// No storm longer than a day: anything longer is a typo, and memory grows with it.
+pub const MAX_DURATION_S: f64 = 86_400.0;
+/// Ten million instants per storm at most (80 MB per series).
+pub const MAX_STEPS: usize = 10_000_000;
+
+impl StormGrid {
+    /// Checks the grid against itself and against the wind discretisation it must be simulated on.
+    pub fn new(duration: f64, time_step: f64, site: &WindSite) -> Result<Self> {
+        require_positive("duration_s", duration)?;
+        require_positive("time_step_s", time_step)?;
+        if duration > MAX_DURATION_S {
+            return Err(Error::invalid("duration_s", format!("at most {MAX_DURATION_S} s (one day), got {duration}")));
+        }
+        if time_step > PI / site.cutoff_rad_s {
+            return Err(Error::invalid(
+                "time_step_s",
+                format!("must resolve the wind's cut-off frequency: at most π/ω_up = {:.4} s", PI / site.cutoff_rad_s),
+            ));
+        }
+        if time_step > duration {
+            return Err(Error::invalid("time_step_s", "must not exceed the duration"));
+        }
+        let grid = StormGrid { duration, time_step };
+        if grid.steps() > MAX_STEPS {
+            return Err(Error::invalid(
+                "time_step_s",
+                format!("{} instants exceed the limit of {MAX_STEPS}; use a longer time step", grid.steps()),
+            ));
+        }
+        Ok(grid)
+    }
+
+    /// Number of instants, both ends included.
+    pub fn steps(&self) -> usize {
+        (self.duration / self.time_step).round() as usize + 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Eq. (13) with the paper's constants reduces to v̄_z = 0.1427 ln(z/0.02) v̄; v* = 0.0418 v̄₁₀.
+    #[test]
+    fn profile_and_shear_velocity_match_the_reduced_constants() {
+        let site = WindSite::default();
+        let factor = 0.8065 * 0.4f64.powf(0.0706) / 200f64.ln();
+        assert!((factor - 0.1427).abs() < 5e-5);
+        assert!((site.mean_speed(154.3, 30.0) - factor * (154.3f64 / 0.02).ln() * 30.0).abs() < 1e-12);
+        let v10 = site.mean_speed(10.0, 30.0);
+        assert!((site.shear_velocity(30.0) / v10 - 0.0418).abs() < 5e-5);
+    }
+
+    #[test]
+    fn absurd_grids_are_refused() {
+        let site = WindSite::default();
+        assert!(StormGrid::new(900.0, 0.01, &site).is_ok());
+        assert!(StormGrid::new(-1.0, 0.01, &site).unwrap_err().to_string().starts_with("duration_s"));
+        assert!(StormGrid::new(1e9, 0.01, &site).is_err());
+        assert!(StormGrid::new(900.0, 0.0, &site).unwrap_err().to_string().starts_with("time_step_s"));
+        assert!(StormGrid::new(900.0, 1.0, &site).unwrap_err().to_string().contains("cut-off"));
+        assert!(StormGrid::new(86_400.0, 1e-4, &site).unwrap_err().to_string().contains("exceed"));
+        assert!(StormGrid::new(f64::NAN, 0.01, &site).is_err());
+    }
+}
