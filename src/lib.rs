@@ -6,7 +6,12 @@
 //! structure, its inputs and its storms together. Everything here is synchronous and deterministic
 //! for a given seed.
 
+pub mod analysis;
+pub mod cli;
+pub mod dynamics;
 pub mod error;
+pub mod problem;
+mod linalg;
 pub mod structure;
 pub mod uncertainty;
 pub mod wind;

@@ -1,1 +1,45 @@
-fn main() {}
+//! `windmeta`: parse the command line and dispatch to an offline command.
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+use windmeta::cli;
+use windmeta::error::Error;
+
+#[derive(Debug, Parser)]
+#[command(name = "windmeta", version, about = "Rapid uncertainty quantification of tall buildings under stochastic wind")]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Natural frequencies, periods, generalized masses and roof-normalised mode shapes.
+    Modes(cli::ModesArgs),
+    /// One storm through the reference model at the inputs' means (or fixed values).
+    Simulate(cli::SimulateArgs),
+    /// Peak roof displacements of many storms through the reference model.
+    SamplePeaks(cli::SamplePeaksArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match &cli.command {
+        Command::Modes(args) => cli::modes(args),
+        Command::Simulate(args) => cli::simulate(args),
+        Command::SamplePeaks(args) => cli::sample_peaks(args),
+    };
+    match result {
+        Ok(output) => {
+            println!("{output}");
+            ExitCode::SUCCESS
+        }
+        Err(error) => {
+            eprintln!("error: {error}");
+            ExitCode::from(match error {
+                Error::Invalid { .. } => 2,
+                _ => 1,
+            })
+        }
+    }
+}

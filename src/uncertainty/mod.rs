@@ -7,4 +7,4 @@ mod sampling;
 
 pub use marginal::{Marginal, StandardSpace};
 pub use model::{parse_assignment, Input, InputModel};
-pub use sampling::{latin_hypercube, monte_carlo, rng_from_seed, Rng};
+pub use sampling::{latin_hypercube, monte_carlo, rng_from_seed, stream_seed, Rng};

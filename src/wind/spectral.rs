@@ -9,6 +9,7 @@
 
 use super::StormGrid;
 use crate::error::{Error, Result};
+use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
 use rand::RngExt;
 use rustfft::num_complex::Complex;
@@ -84,7 +85,8 @@ pub fn simulate(
 
     for m in 0..n {
         let omega0 = (m + 1) as f64 * domega / n as f64;
-        // Column m of the Cholesky factor at every ω_ml, stored line-major: column[l·n + j].
+        // Column m of the Cholesky factor at every ω_ml, stored line-major: column[l·n + j]. Only
+        // columns ≤ m are factored: the later ones would cost more than the earlier ones.
         csd.sweep(omega0, domega, lines, &mut |l, s| {
             factor.copy_from_slice(s);
             cholesky_through_column(&mut factor, n, m);
@@ -113,32 +115,6 @@ pub fn simulate(
         return Ok(coarse);
     }
     Ok(coarse.iter().map(|c| interpolate_cubic(c, dt_g, storm)).collect())
-}
-
-/// Lower Cholesky factor of the symmetric positive semi-definite `a` (row-major n×n, lower triangle
-/// read), computed in place through column `last` only: the simulation needs column m of H(ω_ml),
-/// and the later columns would cost more than the earlier ones. Pivots that rounding drives to or
-/// below zero (the coherence tends to 1 as ω → 0) give a zero column.
-fn cholesky_through_column(a: &mut [f64], n: usize, last: usize) {
-    for k in 0..=last {
-        let mut d = a[k * n + k];
-        for r in 0..k {
-            d -= a[k * n + r] * a[k * n + r];
-        }
-        let pivot = if d > 0.0 { d.sqrt() } else { 0.0 };
-        a[k * n + k] = pivot;
-        for j in k + 1..n {
-            if pivot == 0.0 {
-                a[j * n + k] = 0.0;
-                continue;
-            }
-            let mut v = a[j * n + k];
-            for r in 0..k {
-                v -= a[j * n + r] * a[k * n + r];
-            }
-            a[j * n + k] = v / pivot;
-        }
-    }
 }
 
 /// The smallest length ≥ `n` of the form 2^a 3^b 5^c, on which rustfft is fastest.

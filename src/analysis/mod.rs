@@ -1,0 +1,5 @@
+//! What users read off many storms: peak statistics, and later exceedance curves and validation.
+
+mod peaks;
+
+pub use peaks::{quantile, PeakSummary};

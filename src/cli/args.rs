@@ -1,0 +1,59 @@
+//! Arguments shared by the commands that set up a study.
+
+use crate::error::{Error, Result};
+use crate::problem::{Problem, ProblemSpec};
+use crate::uncertainty::parse_assignment;
+use clap::Args;
+use std::path::PathBuf;
+
+#[derive(Debug, Clone, Args)]
+pub struct ProblemArgs {
+    /// Built-in study: frame40 (dampers as printed, N·s/m) or frame40-kn (the same numbers in kN·s/m).
+    #[arg(long, default_value = "frame40-kn", conflicts_with = "spec")]
+    pub preset: String,
+    /// A study file (JSON): preset or custom structure, input marginals, wind, modes, duration.
+    #[arg(long)]
+    pub spec: Option<PathBuf>,
+    /// Hold an input at a value, e.g. --fix wind_speed=35 (repeatable).
+    #[arg(long = "fix", value_name = "NAME=VALUE")]
+    pub fix: Vec<String>,
+    /// Storm duration (s).
+    #[arg(long)]
+    pub duration: Option<f64>,
+    /// Time step (s).
+    #[arg(long)]
+    pub time_step: Option<f64>,
+    /// Retained modes.
+    #[arg(long)]
+    pub modes: Option<usize>,
+}
+
+impl ProblemArgs {
+    /// Reads the spec (file or preset), applies the command-line overrides and the fixed inputs.
+    pub fn problem(&self) -> Result<Problem> {
+        let mut spec = match &self.spec {
+            Some(path) => {
+                let text = std::fs::read_to_string(path)
+                    .map_err(|e| Error::invalid("spec", format!("cannot read {}: {e}", path.display())))?;
+                serde_json::from_str::<ProblemSpec>(&text)
+                    .map_err(|e| Error::invalid("spec", format!("{}: {e}", path.display())))?
+            }
+            None => ProblemSpec { preset: Some(self.preset.clone()), ..Default::default() },
+        };
+        if self.duration.is_some() {
+            spec.duration_s = self.duration;
+        }
+        if self.time_step.is_some() {
+            spec.time_step_s = self.time_step;
+        }
+        if self.modes.is_some() {
+            spec.modes = self.modes;
+        }
+        let mut problem = Problem::from_spec(&spec)?;
+        for assignment in &self.fix {
+            let (name, value) = parse_assignment(assignment)?;
+            problem.inputs = problem.inputs.with_fixed(&name, value)?;
+        }
+        Ok(problem)
+    }
+}

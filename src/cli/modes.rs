@@ -1,0 +1,43 @@
+//! `windmeta modes`: frequencies, periods, generalized masses and roof-normalised shapes.
+
+use super::ProblemArgs;
+use crate::error::Result;
+use clap::Args;
+use serde_json::json;
+
+#[derive(Debug, Clone, Args)]
+pub struct ModesArgs {
+    #[command(flatten)]
+    pub problem: ProblemArgs,
+    /// Print JSON instead of a table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub fn modes(args: &ModesArgs) -> Result<String> {
+    let problem = args.problem.problem()?;
+    let modes = &problem.modes;
+    let shapes: Vec<Vec<f64>> =
+        (0..modes.count()).map(|m| (0..problem.structure.floors()).map(|j| modes.shapes[(j, m)]).collect()).collect();
+    if args.json {
+        let value = json!({
+            "preset": problem.name,
+            "frequencies_rad_s": modes.frequencies,
+            "periods_s": modes.periods(),
+            "modal_masses_kg": modes.modal_masses,
+            "shapes": shapes,
+        });
+        return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
+    }
+    let mut out = format!("{}: {} floors, roof at {:.1} m\n", problem.name, problem.structure.floors(), problem.structure.floor_elevations.last().unwrap());
+    out += "mode  ω (rad/s)  f (Hz)   T (s)   M_m (kg)\n";
+    for (m, (w, mass)) in modes.frequencies.iter().zip(&modes.modal_masses).enumerate() {
+        out += &format!("{:>4}  {:>9.4}  {:>6.4}  {:>6.3}  {:>10.4e}\n", m + 1, w, w / (2.0 * std::f64::consts::PI), 2.0 * std::f64::consts::PI / w, mass);
+    }
+    out += "shapes (roof = 1), floor by floor from the roof down:\n";
+    for j in (0..problem.structure.floors()).rev() {
+        let row: Vec<String> = shapes.iter().map(|s| format!("{:>8.4}", s[j])).collect();
+        out += &format!("{:>5}  {}\n", j + 1, row.join(" "));
+    }
+    Ok(out)
+}

@@ -1,0 +1,134 @@
+//! The full-order reference: every floor's equation (Eq. 1) with classical modal damping,
+//! M ü + C u̇ + K u + Bᵀ F(B u̇) = f(t), by Newmark's constant average acceleration.
+//!
+//! In the new velocities s the step reads A s = r − Bᵀ F(B s) with A = 2M/Δt + C + ΔtK/2, so it ends
+//! in the same implicit damper solve as the reduced model with W = A⁻¹. A different discretisation
+//! from the modal exponential integrator, so the two check each other.
+
+use super::damper::{Dampers, ImplicitDamperSolve};
+use crate::error::{Error, Result};
+use crate::linalg::{cholesky, cholesky_solve};
+use crate::structure::{Modes, Structure};
+use crate::wind::FloorForces;
+
+/// Displacement history of every floor: `displacements[floor][step]`.
+#[derive(Debug, Clone)]
+pub struct FloorResponse {
+    pub displacements: Vec<Vec<f64>>,
+}
+
+/// M, C and K of one sample, row-major.
+#[derive(Debug, Clone)]
+pub struct FullSystem {
+    pub size: usize,
+    pub mass: Vec<f64>,
+    pub damping: Vec<f64>,
+    pub stiffness: Vec<f64>,
+}
+
+impl FullSystem {
+    /// K = κ K₀, M = μ M₀ and the classical damping C = M Φ diag(2ζω_n/M_n) Φᵀ M over all modes,
+    /// which gives every mode the ratio ζ. `all_modes` are the nominal structure's N modes.
+    pub fn new(structure: &Structure, all_modes: &Modes, stiffness_factor: f64, mass_factor: f64, damping_ratio: f64) -> Self {
+        let n = structure.floors();
+        let modes = all_modes.scaled(stiffness_factor, mass_factor);
+        let mass: Vec<f64> = (0..n * n).map(|k| mass_factor * structure.mass[(k / n, k % n)]).collect();
+        let stiffness: Vec<f64> = (0..n * n).map(|k| stiffness_factor * structure.stiffness[(k / n, k % n)]).collect();
+        // M φ_r for every mode r, then C = Σ_r (2ζω_r/M_r) (Mφ_r)(Mφ_r)ᵀ.
+        let mut damping = vec![0.0; n * n];
+        for r in 0..modes.count() {
+            let m_phi: Vec<f64> = (0..n).map(|i| (0..n).map(|k| mass[i * n + k] * modes.shapes[(k, r)]).sum()).collect();
+            let weight = 2.0 * damping_ratio * modes.frequencies[r] / modes.modal_masses[r];
+            for i in 0..n {
+                for j in 0..n {
+                    damping[i * n + j] += weight * m_phi[i] * m_phi[j];
+                }
+            }
+        }
+        FullSystem { size: n, mass, damping, stiffness }
+    }
+
+    fn apply(matrix: &[f64], n: usize, x: &[f64], out: &mut [f64]) {
+        for i in 0..n {
+            out[i] = (0..n).map(|j| matrix[i * n + j] * x[j]).sum();
+        }
+    }
+}
+
+/// Integrates the full-order model from the static equilibrium under the mean load.
+pub fn integrate_full(system: &FullSystem, dampers: &Dampers, forces: &FloorForces, time_step: f64) -> Result<FloorResponse> {
+    let n = system.size;
+    let dt = time_step;
+    if forces.series.len() != n {
+        return Err(Error::invalid("forces", format!("{} floor series for {n} floors", forces.series.len())));
+    }
+    let steps = forces.series[0].len();
+    let mut a_eff: Vec<f64> = (0..n * n)
+        .map(|k| 2.0 / dt * system.mass[k] + system.damping[k] + 0.5 * dt * system.stiffness[k])
+        .collect();
+    let mut solver = ImplicitDamperSolve::new(a_eff.clone(), dampers.floor_weights.clone(), dampers);
+    if !cholesky(&mut a_eff, n) {
+        return Err(Error::Numerical("the Newmark iteration matrix is not positive definite".into()));
+    }
+    let mut k_factor = system.stiffness.clone();
+    let mut m_factor = system.mass.clone();
+    if !cholesky(&mut k_factor, n) || !cholesky(&mut m_factor, n) {
+        return Err(Error::Numerical("stiffness or mass lost positive definiteness".into()));
+    }
+    // Static equilibrium under the mean load, at rest; the initial acceleration balances the rest.
+    let mut u = forces.mean.clone();
+    cholesky_solve(&k_factor, n, &mut u);
+    let mut v = vec![0.0; n];
+    let mut acc: Vec<f64> = (0..n).map(|j| forces.series[j][0] - forces.mean[j]).collect();
+    cholesky_solve(&m_factor, n, &mut acc);
+
+    let active = dampers.coefficients.iter().any(|&c| c > 0.0);
+    let mut displacements: Vec<Vec<f64>> = u.iter().map(|&x| {
+        let mut series = Vec::with_capacity(steps);
+        series.push(x);
+        series
+    }).collect();
+    let (mut rhs, mut work, mut predicted) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
+    let mut s = vec![0.0; n];
+    let mut correction = vec![0.0; n];
+    let mut damper_forces = vec![0.0; dampers.len()];
+    for i in 1..steps {
+        // r = f_{i+1} + M(2u̇/Δt + ü) − K(u + Δt u̇/2).
+        for j in 0..n {
+            work[j] = 2.0 / dt * v[j] + acc[j];
+        }
+        FullSystem::apply(&system.mass, n, &work, &mut rhs);
+        for j in 0..n {
+            work[j] = u[j] + 0.5 * dt * v[j];
+        }
+        FullSystem::apply(&system.stiffness, n, &work, &mut predicted);
+        for j in 0..n {
+            rhs[j] += forces.series[j][i] - predicted[j];
+        }
+        cholesky_solve(&a_eff, n, &mut rhs);
+        let a = &rhs;
+        if active {
+            // Predictor: the previous step's damper correction a − s.
+            for j in 0..n {
+                s[j] = a[j] - correction[j];
+            }
+            solver.solve(a, &mut s, &mut damper_forces)?;
+            for j in 0..n {
+                correction[j] = a[j] - s[j];
+            }
+        } else {
+            s.copy_from_slice(a);
+        }
+        for j in 0..n {
+            let new_acc = 2.0 / dt * (s[j] - v[j]) - acc[j];
+            u[j] += 0.5 * dt * (v[j] + s[j]);
+            v[j] = s[j];
+            acc[j] = new_acc;
+            if !u[j].is_finite() {
+                return Err(Error::Numerical(format!("the full-order model diverged at step {i}")));
+            }
+            displacements[j].push(u[j]);
+        }
+    }
+    Ok(FloorResponse { displacements })
+}

@@ -1,0 +1,10 @@
+//! The damped building in time: nonlinear viscous dampers and the two reference integrators,
+//! reduced-order (retained modes) and full-order (every floor).
+
+mod damper;
+mod full;
+mod modal;
+
+pub use damper::{Dampers, ImplicitDamperSolve};
+pub use full::{integrate_full, FloorResponse, FullSystem};
+pub use modal::{integrate_reduced, ModalResponse};
