@@ -38,7 +38,11 @@ pub type Result<T> = std::result::Result<T, Error>;
 
 /// Refuses a value that is NaN or infinite.
 pub fn require_finite(field: &str, value: f64) -> Result<f64> {
-    if value.is_finite() { Ok(value) } else { Err(Error::invalid(field, format!("must be a finite number, got {value}"))) }
+    if value.is_finite() {
+        Ok(value)
+    } else {
+        Err(Error::invalid(field, format!("must be a finite number, got {value}")))
+    }
 }
 
 /// Refuses a value that is not finite and strictly positive.

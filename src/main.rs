@@ -6,7 +6,11 @@ use windmeta::cli;
 use windmeta::error::Error;
 
 #[derive(Debug, Parser)]
-#[command(name = "windmeta", version, about = "Rapid uncertainty quantification of tall buildings under stochastic wind")]
+#[command(
+    name = "windmeta",
+    version,
+    about = "Rapid uncertainty quantification of tall buildings under stochastic wind"
+)]
 struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -20,6 +24,8 @@ enum Command {
     Simulate(cli::SimulateArgs),
     /// Peak roof displacements of many storms through the reference model.
     SamplePeaks(cli::SamplePeaksArgs),
+    /// Medians of the stages of one full-size storm, measured side by side.
+    Bench(cli::BenchArgs),
 }
 
 fn main() -> ExitCode {
@@ -28,6 +34,7 @@ fn main() -> ExitCode {
         Command::Modes(args) => cli::modes(args),
         Command::Simulate(args) => cli::simulate(args),
         Command::SamplePeaks(args) => cli::sample_peaks(args),
+        Command::Bench(args) => cli::bench(args),
     };
     match result {
         Ok(output) => {

@@ -5,9 +5,9 @@
 //! `mass_factor`, `damping_ratio` (shared by all modes), `damper_c1` … `damper_cG` (N·(s/m)^α, one
 //! per damper group from the ground up) and `wind_speed` (m/s at the station, 10 m).
 
-use crate::dynamics::{integrate_full, integrate_reduced, Dampers, FullSystem};
+use crate::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
-use crate::structure::{frame40, CustomStructure, Modes, Structure};
+use crate::structure::{CustomStructure, Modes, Structure, frame40};
 use crate::uncertainty::{Input, InputModel, Marginal, Rng};
 use crate::wind::{ModalForces, StormGrid, WindLoads, WindSite};
 use serde::{Deserialize, Serialize};
@@ -105,7 +105,13 @@ pub struct Problem {
 
 fn default_inputs(structure: &Structure, damper_scale: f64) -> InputModel {
     let mut inputs = vec![
-        Input { name: "youngs_modulus".into(), marginal: Marginal::Lognormal { mean: structure.reference_youngs_modulus, sd: structure.reference_youngs_modulus * 15.0 / 210.0 } },
+        Input {
+            name: "youngs_modulus".into(),
+            marginal: Marginal::Lognormal {
+                mean: structure.reference_youngs_modulus,
+                sd: structure.reference_youngs_modulus * 15.0 / 210.0,
+            },
+        },
         Input { name: "mass_factor".into(), marginal: Marginal::Lognormal { mean: 1.0, sd: 0.05 } },
         Input { name: "damping_ratio".into(), marginal: Marginal::Lognormal { mean: 0.015, sd: 0.005 } },
     ];
@@ -129,7 +135,9 @@ fn check_admissible(input: &Input) -> Result<()> {
         let bound = if positive { "positive" } else { "non-negative" };
         return Err(Error::invalid(
             format!("inputs.{}", input.name),
-            format!("must be {bound}, but its distribution reaches {lower}; choose one that stays {bound} (lognormal, uniform)"),
+            format!(
+                "must be {bound}, but its distribution reaches {lower}; choose one that stays {bound} (lognormal, uniform)"
+            ),
         ));
     }
     Ok(())
@@ -146,13 +154,18 @@ impl Problem {
             Some("frame40") => ("frame40", 1.0),
             Some("frame40-kn") => ("frame40-kn", 1000.0),
             Some(other) => {
-                return Err(Error::invalid("preset", format!("unknown preset `{other}`; the presets are {}", PRESETS.join(", "))));
+                return Err(Error::invalid(
+                    "preset",
+                    format!("unknown preset `{other}`; the presets are {}", PRESETS.join(", ")),
+                ));
             }
             None if spec.structure.is_some() => ("custom", 1.0),
             None => return Err(Error::invalid("preset", "give a preset name or a custom structure")),
         };
         let (structure, name) = match &spec.structure {
-            Some(custom) => (custom.build()?, if spec.preset.is_some() { format!("{name}+custom") } else { "custom".into() }),
+            Some(custom) => {
+                (custom.build()?, if spec.preset.is_some() { format!("{name}+custom") } else { "custom".into() })
+            }
             None => (frame40()?, name.to_string()),
         };
         let mut inputs = default_inputs(&structure, damper_scale);
@@ -214,7 +227,9 @@ impl Problem {
     pub fn modal_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<ModalForces> {
         match path {
             WindPath::Modal => self.wind.modal_forces(p.wind_speed, self.modes.shapes.as_ref(), &self.storm, rng),
-            WindPath::Field => Ok(self.wind.floor_forces(p.wind_speed, &self.storm, rng)?.project(self.modes.shapes.as_ref())),
+            WindPath::Field => {
+                Ok(self.wind.floor_forces(p.wind_speed, &self.storm, rng)?.project(self.modes.shapes.as_ref()))
+            }
         }
     }
 
@@ -244,7 +259,13 @@ impl Problem {
                 let forces = self.wind.floor_forces(p.wind_speed, &self.storm, rng)?;
                 let wind_seconds = started.elapsed().as_secs_f64();
                 let started = Instant::now();
-                let system = FullSystem::new(&self.structure, &self.all_modes, self.stiffness_factor(&p), p.mass_factor, p.damping_ratio);
+                let system = FullSystem::new(
+                    &self.structure,
+                    &self.all_modes,
+                    self.stiffness_factor(&p),
+                    p.mass_factor,
+                    p.damping_ratio,
+                );
                 let response = integrate_full(&system, &dampers, &forces, dt)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
                 let roof = response.displacements.last().cloned().unwrap_or_default();
@@ -264,7 +285,16 @@ mod tests {
         let names: Vec<&str> = p.inputs.names().collect();
         assert_eq!(
             names,
-            ["youngs_modulus", "mass_factor", "damping_ratio", "damper_c1", "damper_c2", "damper_c3", "damper_c4", "wind_speed"]
+            [
+                "youngs_modulus",
+                "mass_factor",
+                "damping_ratio",
+                "damper_c1",
+                "damper_c2",
+                "damper_c3",
+                "damper_c4",
+                "wind_speed"
+            ]
         );
         assert_eq!(p.inputs.marginal("damper_c3").unwrap(), &Marginal::Uniform { lower: 0.0, upper: 1.0e5 });
         let q = Problem::preset("frame40").unwrap();

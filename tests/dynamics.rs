@@ -2,7 +2,7 @@
 //! dampers on, and the reduced model (3 modes) against the full-order model on the same storm.
 
 use faer::Mat;
-use windmeta::dynamics::{integrate_full, integrate_reduced, Dampers, FullSystem};
+use windmeta::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
 use windmeta::problem::Problem;
 use windmeta::structure::Modes;
 use windmeta::uncertainty::rng_from_seed;
@@ -25,7 +25,9 @@ fn harmonic_from_rest(t: f64, omega: f64, zeta: f64, force_over_k: f64, forcing:
     let wd = omega * (1.0 - zeta * zeta).sqrt();
     let c1 = -b;
     let c2 = (zeta * omega * c1 - a * forcing) / wd;
-    a * (forcing * t).sin() + b * (forcing * t).cos() + (-zeta * omega * t).exp() * (c1 * (wd * t).cos() + c2 * (wd * t).sin())
+    a * (forcing * t).sin()
+        + b * (forcing * t).cos()
+        + (-zeta * omega * t).exp() * (c1 * (wd * t).cos() + c2 * (wd * t).sin())
 }
 
 /// A step load is linear within every step, so the exponential integrator is exact to rounding.
@@ -35,12 +37,14 @@ fn modal_integrator_is_exact_for_a_step_load() {
     let dt = 0.05;
     let steps = 2001;
     let forces = ModalForces { mean: vec![0.0], series: vec![vec![force; steps]] };
-    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt).unwrap().displacements.remove(0);
+    let y =
+        integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt).unwrap().displacements.remove(0);
     let static_ = force / (mass * omega * omega);
     let wd = omega * (1.0 - zeta * zeta).sqrt();
     for (i, yi) in y.iter().enumerate() {
         let t = i as f64 * dt;
-        let exact = static_ * (1.0 - (-zeta * omega * t).exp() * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin()));
+        let exact = static_
+            * (1.0 - (-zeta * omega * t).exp() * ((wd * t).cos() + zeta / (1.0 - zeta * zeta).sqrt() * (wd * t).sin()));
         assert!((yi - exact).abs() < 1e-12 * static_, "t = {t}: {yi} vs {exact}");
     }
 }
@@ -54,7 +58,8 @@ fn modal_integrator_matches_the_harmonic_closed_form() {
     let steps = 3001;
     let series = (0..steps).map(|i| force * (forcing * i as f64 * dt).sin()).collect();
     let forces = ModalForces { mean: vec![0.0], series: vec![series] };
-    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt).unwrap().displacements.remove(0);
+    let y =
+        integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt).unwrap().displacements.remove(0);
     let amplitude = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let k = mass * omega * omega;
     for (i, yi) in y.iter().enumerate() {
@@ -106,7 +111,8 @@ fn reduced_model_converges_as_the_time_step_shrinks() {
     let finest = 0.0025;
     let (p, x) = stiff_damper_problem(60.0, finest);
     let params = p.parameters(&x).unwrap();
-    let forces = p.wind.modal_forces(params.wind_speed, p.modes.shapes.as_ref(), &p.storm, &mut rng_from_seed(8)).unwrap();
+    let forces =
+        p.wind.modal_forces(params.wind_speed, p.modes.shapes.as_ref(), &p.storm, &mut rng_from_seed(8)).unwrap();
     let modes = p.sample_modes(&params);
     let dampers = p.dampers(&params).unwrap();
     let roofs: Vec<Vec<f64>> = [8, 4, 2, 1]
@@ -133,7 +139,13 @@ fn full_order_model_converges_as_the_time_step_shrinks() {
     let (p, x) = stiff_damper_problem(60.0, finest);
     let params = p.parameters(&x).unwrap();
     let forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(8)).unwrap();
-    let system = FullSystem::new(&p.structure, &p.all_modes, p.stiffness_factor(&params), params.mass_factor, params.damping_ratio);
+    let system = FullSystem::new(
+        &p.structure,
+        &p.all_modes,
+        p.stiffness_factor(&params),
+        params.mass_factor,
+        params.damping_ratio,
+    );
     let dampers = p.dampers(&params).unwrap();
     let roofs: Vec<Vec<f64>> = [8, 4, 2, 1]
         .iter()
@@ -159,8 +171,16 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
     let floor_forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(21)).unwrap();
     let modal_forces = floor_forces.project(p.modes.shapes.as_ref());
     let dampers = p.dampers(&params).unwrap();
-    let reduced = integrate_reduced(&p.sample_modes(&params), params.damping_ratio, &dampers, &modal_forces, 0.01).unwrap().roof();
-    let system = FullSystem::new(&p.structure, &p.all_modes, p.stiffness_factor(&params), params.mass_factor, params.damping_ratio);
+    let reduced = integrate_reduced(&p.sample_modes(&params), params.damping_ratio, &dampers, &modal_forces, 0.01)
+        .unwrap()
+        .roof();
+    let system = FullSystem::new(
+        &p.structure,
+        &p.all_modes,
+        p.stiffness_factor(&params),
+        params.mass_factor,
+        params.damping_ratio,
+    );
     let full = integrate_full(&system, &dampers, &floor_forces, 0.01).unwrap().displacements.pop().unwrap();
     let peak = |u: &[f64]| u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mean = |u: &[f64]| u.iter().sum::<f64>() / u.len() as f64;
@@ -169,9 +189,14 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
     // The static part differs by the truncation of modes 4-40 under the mean load, computable in
     // closed form: the 3-mode static roof displacement against the full order's initial state.
     let modes = p.sample_modes(&params);
-    let static_reduced: f64 = (0..3).map(|m| modal_forces.mean[m] / (modes.modal_masses[m] * modes.frequencies[m].powi(2))).sum();
+    let static_reduced: f64 =
+        (0..3).map(|m| modal_forces.mean[m] / (modes.modal_masses[m] * modes.frequencies[m].powi(2))).sum();
     let truncation = static_reduced - full[0];
-    assert!((mean(&diff) / truncation - 1.0).abs() < 0.2, "mean difference {} vs static truncation {truncation}", mean(&diff));
+    assert!(
+        (mean(&diff) / truncation - 1.0).abs() < 0.2,
+        "mean difference {} vs static truncation {truncation}",
+        mean(&diff)
+    );
     // Modes 4+ (ω ≥ 10 rad/s) lie above the wind's cut-off and respond quasi-statically: the dynamic
     // difference stays within 1 % of the response's fluctuation (measured 0.4 %), the peaks within
     // 1 % (measured 0.16 %).

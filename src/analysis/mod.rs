@@ -2,4 +2,4 @@
 
 mod peaks;
 
-pub use peaks::{quantile, PeakSummary};
+pub use peaks::{PeakSummary, quantile};

@@ -18,10 +18,10 @@ pub struct ProblemArgs {
     #[arg(long = "fix", value_name = "NAME=VALUE")]
     pub fix: Vec<String>,
     /// Storm duration (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub duration: Option<f64>,
     /// Time step (s).
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub time_step: Option<f64>,
     /// Retained modes.
     #[arg(long)]

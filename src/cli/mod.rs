@@ -1,12 +1,14 @@
-//! The offline commands: what `windmeta modes`, `simulate` and `sample-peaks` do, as functions of
+//! The offline commands: what `windmeta modes`, `simulate`, `sample-peaks` and `bench` do, as functions of
 //! their parsed arguments. `main.rs` only parses and dispatches.
 
 mod args;
+mod bench;
 mod modes;
 mod peaks;
 mod simulate;
 
 pub use args::ProblemArgs;
-pub use modes::{modes, ModesArgs};
-pub use peaks::{sample_peaks, SamplePeaksArgs};
-pub use simulate::{simulate, SimulateArgs};
+pub use bench::{BenchArgs, BenchRow, bench, physics_rows, table};
+pub use modes::{ModesArgs, modes};
+pub use peaks::{SamplePeaksArgs, sample_peaks};
+pub use simulate::{SimulateArgs, simulate};

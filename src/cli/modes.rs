@@ -29,10 +29,22 @@ pub fn modes(args: &ModesArgs) -> Result<String> {
         });
         return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
     }
-    let mut out = format!("{}: {} floors, roof at {:.1} m\n", problem.name, problem.structure.floors(), problem.structure.floor_elevations.last().unwrap());
+    let mut out = format!(
+        "{}: {} floors, roof at {:.1} m\n",
+        problem.name,
+        problem.structure.floors(),
+        problem.structure.floor_elevations.last().unwrap()
+    );
     out += "mode  ω (rad/s)  f (Hz)   T (s)   M_m (kg)\n";
     for (m, (w, mass)) in modes.frequencies.iter().zip(&modes.modal_masses).enumerate() {
-        out += &format!("{:>4}  {:>9.4}  {:>6.4}  {:>6.3}  {:>10.4e}\n", m + 1, w, w / (2.0 * std::f64::consts::PI), 2.0 * std::f64::consts::PI / w, mass);
+        out += &format!(
+            "{:>4}  {:>9.4}  {:>6.4}  {:>6.3}  {:>10.4e}\n",
+            m + 1,
+            w,
+            w / (2.0 * std::f64::consts::PI),
+            2.0 * std::f64::consts::PI / w,
+            mass
+        );
     }
     out += "shapes (roof = 1), floor by floor from the roof down:\n";
     for j in (0..problem.structure.floors()).rev() {

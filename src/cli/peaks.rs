@@ -1,7 +1,7 @@
 //! `windmeta sample-peaks`: peak roof displacements of many storms through the reference model.
 
-use super::simulate::WindChoice;
 use super::ProblemArgs;
+use super::simulate::WindChoice;
 use crate::analysis::PeakSummary;
 use crate::error::{Error, Result};
 use crate::problem::{Order, WindPath};
@@ -38,7 +38,10 @@ pub struct SamplePeaksArgs {
 
 pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
     if args.samples == 0 || args.samples > MAX_REFERENCE_SAMPLES {
-        return Err(Error::invalid("samples", format!("must be between 1 and {MAX_REFERENCE_SAMPLES}, got {}", args.samples)));
+        return Err(Error::invalid(
+            "samples",
+            format!("must be between 1 and {MAX_REFERENCE_SAMPLES}, got {}", args.samples),
+        ));
     }
     let mut problem = args.problem.problem()?;
     if args.nominal {
@@ -47,7 +50,8 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
     let started = Instant::now();
     let inputs = monte_carlo(&problem.inputs, args.samples, &mut rng_from_seed(args.seed));
     let order = if args.full_order { Order::Full } else { Order::Reduced };
-    let path = if args.full_order || matches!(args.wind, WindChoice::Field) { WindPath::Field } else { WindPath::Modal };
+    let path =
+        if args.full_order || matches!(args.wind, WindChoice::Field) { WindPath::Field } else { WindPath::Modal };
     let done = AtomicUsize::new(0);
     let step = (args.samples / 10).max(1);
     let peaks = inputs
@@ -56,7 +60,7 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
         .map(|(k, x)| {
             let run = problem.reference_run(x, order, path, &mut rng_from_seed(stream_seed(args.seed, k as u64)))?;
             let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if finished % step == 0 || finished == args.samples {
+            if finished.is_multiple_of(step) || finished == args.samples {
                 eprintln!("{finished}/{} storms, {:.1} s", args.samples, started.elapsed().as_secs_f64());
             }
             Ok(run.peak())

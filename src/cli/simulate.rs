@@ -50,16 +50,24 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
     };
     let run = problem.reference_run(&x, order, path, &mut rng_from_seed(args.seed))?;
     let dt = problem.storm.time_step;
-    let (peak_index, peak) = run.roof.iter().enumerate().fold((0, 0.0f64), |(bi, b), (i, v)| if v.abs() > b { (i, v.abs()) } else { (bi, b) });
+    let (peak_index, peak) = run
+        .roof
+        .iter()
+        .enumerate()
+        .fold((0, 0.0f64), |(bi, b), (i, v)| if v.abs() > b { (i, v.abs()) } else { (bi, b) });
     if let Some(path) = &args.out {
-        let mut writer = csv::Writer::from_path(path).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
+        let mut writer =
+            csv::Writer::from_path(path).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
         writer.write_record(["t_s", "roof_m"]).map_err(|e| Error::invalid("out", e.to_string()))?;
         for (i, u) in run.roof.iter().enumerate() {
-            writer.write_record([format!("{:.4}", i as f64 * dt), format!("{u:.9e}")]).map_err(|e| Error::invalid("out", e.to_string()))?;
+            writer
+                .write_record([format!("{:.4}", i as f64 * dt), format!("{u:.9e}")])
+                .map_err(|e| Error::invalid("out", e.to_string()))?;
         }
         writer.flush().map_err(|e| Error::invalid("out", e.to_string()))?;
     }
-    let inputs: serde_json::Map<String, serde_json::Value> = problem.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
+    let inputs: serde_json::Map<String, serde_json::Value> =
+        problem.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
     let order_name = if args.full_order { "full" } else { "reduced" };
     let path_name = match path {
         WindPath::Field => "field",

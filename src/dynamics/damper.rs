@@ -52,7 +52,10 @@ impl Dampers {
         }
         for (g, &c) in group_coefficients.iter().enumerate() {
             if !(c.is_finite() && c >= 0.0) {
-                return Err(Error::invalid(format!("inputs.damper_c{}", g + 1), format!("must be finite and ≥ 0, got {c}")));
+                return Err(Error::invalid(
+                    format!("inputs.damper_c{}", g + 1),
+                    format!("must be finite and ≥ 0, got {c}"),
+                ));
             }
         }
         let floor_weights = structure
@@ -88,9 +91,7 @@ impl Dampers {
         self.floor_weights
             .iter()
             .map(|row| {
-                (0..shapes.ncols())
-                    .map(|m| (m, row.iter().map(|&(floor, w)| w * shapes[(floor, m)]).sum()))
-                    .collect()
+                (0..shapes.ncols()).map(|m| (m, row.iter().map(|&(floor, w)| w * shapes[(floor, m)]).sum())).collect()
             })
             .collect()
     }
@@ -147,8 +148,7 @@ impl ImplicitDamperSolve {
             quadratic += di * row;
         }
         let p = 1.0 + self.exponent;
-        let dissipation: f64 =
-            velocities.iter().zip(&self.coefficients).map(|(v, c)| c / p * v.abs().powf(p)).sum();
+        let dissipation: f64 = velocities.iter().zip(&self.coefficients).map(|(v, c)| c / p * v.abs().powf(p)).sum();
         0.5 * quadratic + dissipation
     }
 
@@ -179,6 +179,12 @@ impl ImplicitDamperSolve {
         }
     }
 
+    fn take_trial_step(&mut self, s: &[f64]) {
+        for ((trial, x), step) in self.trial.iter_mut().zip(s).zip(&self.step) {
+            *trial = x + step;
+        }
+    }
+
     /// step = −H⁻¹ g with the Hessian model of the last [`Self::linearise`].
     fn model_step(&mut self) -> Result<()> {
         let n = self.size;
@@ -201,7 +207,6 @@ impl ImplicitDamperSolve {
     /// without a line search. That is what converges where a damper comes to rest at the solution,
     /// where Newton overshoots by the factor 1 − 1/α.
     pub fn solve(&mut self, a: &[f64], s: &mut [f64], forces: &mut [f64]) -> Result<usize> {
-        let n = self.size;
         for iteration in 0..MAX_NEWTON_ITERATIONS {
             let scale = s.iter().chain(a).fold(0.0f64, |m, x| m.max(x.abs()));
             let tolerance = STEP_TOLERANCE * scale + f64::MIN_POSITIVE;
@@ -220,9 +225,7 @@ impl ImplicitDamperSolve {
             }
             let current = self.objective(s, a, &self.velocities);
             let slope: f64 = self.gradient.iter().zip(&self.step).map(|(g, d)| g * d).sum();
-            for i in 0..n {
-                self.trial[i] = s[i] + self.step[i];
-            }
+            self.take_trial_step(s);
             let mut trial_velocities = std::mem::take(&mut self.velocities);
             Self::damper_velocities(&self.map, &self.trial, &mut trial_velocities);
             let value = self.objective(&self.trial, a, &trial_velocities);
@@ -231,9 +234,7 @@ impl ImplicitDamperSolve {
             if !accepted {
                 self.linearise(s, a, forces, 1.0, floor);
                 self.model_step()?;
-                for i in 0..n {
-                    self.trial[i] = s[i] + self.step[i];
-                }
+                self.take_trial_step(s);
             }
             s.copy_from_slice(&self.trial);
         }
@@ -268,7 +269,11 @@ mod tests {
                 let mut s = [start];
                 let mut f = [0.0];
                 solver.solve(&[a], &mut s, &mut f).unwrap();
-                assert!((s[0] - root).abs() < 1e-10 * a.abs() + 1e-14, "a={a} w={w} c={c} start={start}: {} vs {root}", s[0]);
+                assert!(
+                    (s[0] - root).abs() < 1e-10 * a.abs() + 1e-14,
+                    "a={a} w={w} c={c} start={start}: {} vs {root}",
+                    s[0]
+                );
             }
         }
     }

@@ -29,7 +29,13 @@ pub struct FullSystem {
 impl FullSystem {
     /// K = κ K₀, M = μ M₀ and the classical damping C = M Φ diag(2ζω_n/M_n) Φᵀ M over all modes,
     /// which gives every mode the ratio ζ. `all_modes` are the nominal structure's N modes.
-    pub fn new(structure: &Structure, all_modes: &Modes, stiffness_factor: f64, mass_factor: f64, damping_ratio: f64) -> Self {
+    pub fn new(
+        structure: &Structure,
+        all_modes: &Modes,
+        stiffness_factor: f64,
+        mass_factor: f64,
+        damping_ratio: f64,
+    ) -> Self {
         let n = structure.floors();
         let modes = all_modes.scaled(stiffness_factor, mass_factor);
         let mass: Vec<f64> = (0..n * n).map(|k| mass_factor * structure.mass[(k / n, k % n)]).collect();
@@ -37,7 +43,8 @@ impl FullSystem {
         // M φ_r for every mode r, then C = Σ_r (2ζω_r/M_r) (Mφ_r)(Mφ_r)ᵀ.
         let mut damping = vec![0.0; n * n];
         for r in 0..modes.count() {
-            let m_phi: Vec<f64> = (0..n).map(|i| (0..n).map(|k| mass[i * n + k] * modes.shapes[(k, r)]).sum()).collect();
+            let m_phi: Vec<f64> =
+                (0..n).map(|i| (0..n).map(|k| mass[i * n + k] * modes.shapes[(k, r)]).sum()).collect();
             let weight = 2.0 * damping_ratio * modes.frequencies[r] / modes.modal_masses[r];
             for i in 0..n {
                 for j in 0..n {
@@ -56,16 +63,20 @@ impl FullSystem {
 }
 
 /// Integrates the full-order model from the static equilibrium under the mean load.
-pub fn integrate_full(system: &FullSystem, dampers: &Dampers, forces: &FloorForces, time_step: f64) -> Result<FloorResponse> {
+pub fn integrate_full(
+    system: &FullSystem,
+    dampers: &Dampers,
+    forces: &FloorForces,
+    time_step: f64,
+) -> Result<FloorResponse> {
     let n = system.size;
     let dt = time_step;
     if forces.series.len() != n {
         return Err(Error::invalid("forces", format!("{} floor series for {n} floors", forces.series.len())));
     }
     let steps = forces.series[0].len();
-    let mut a_eff: Vec<f64> = (0..n * n)
-        .map(|k| 2.0 / dt * system.mass[k] + system.damping[k] + 0.5 * dt * system.stiffness[k])
-        .collect();
+    let mut a_eff: Vec<f64> =
+        (0..n * n).map(|k| 2.0 / dt * system.mass[k] + system.damping[k] + 0.5 * dt * system.stiffness[k]).collect();
     let mut solver = ImplicitDamperSolve::new(a_eff.clone(), dampers.floor_weights.clone(), dampers);
     if !cholesky(&mut a_eff, n) {
         return Err(Error::Numerical("the Newmark iteration matrix is not positive definite".into()));
@@ -83,11 +94,14 @@ pub fn integrate_full(system: &FullSystem, dampers: &Dampers, forces: &FloorForc
     cholesky_solve(&m_factor, n, &mut acc);
 
     let active = dampers.coefficients.iter().any(|&c| c > 0.0);
-    let mut displacements: Vec<Vec<f64>> = u.iter().map(|&x| {
-        let mut series = Vec::with_capacity(steps);
-        series.push(x);
-        series
-    }).collect();
+    let mut displacements: Vec<Vec<f64>> = u
+        .iter()
+        .map(|&x| {
+            let mut series = Vec::with_capacity(steps);
+            series.push(x);
+            series
+        })
+        .collect();
     let (mut rhs, mut work, mut predicted) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut s = vec![0.0; n];
     let mut correction = vec![0.0; n];

@@ -6,5 +6,5 @@ mod full;
 mod modal;
 
 pub use damper::{Dampers, ImplicitDamperSolve};
-pub use full::{integrate_full, FloorResponse, FullSystem};
-pub use modal::{integrate_reduced, ModalResponse};
+pub use full::{FloorResponse, FullSystem, integrate_full};
+pub use modal::{ModalResponse, integrate_reduced};

@@ -117,11 +117,13 @@ pub fn integrate_reduced(
     let mut y: Vec<f64> = (0..count).map(|m| forces.mean[m] / (masses[m] * modes.frequencies[m].powi(2))).collect();
     let mut v = vec![0.0; count];
     let mut load: Vec<f64> = (0..count).map(|m| forces.series[m][0] / masses[m]).collect();
-    let mut displacements: Vec<Vec<f64>> = (0..count).map(|m| {
-        let mut series = Vec::with_capacity(steps);
-        series.push(y[m]);
-        series
-    }).collect();
+    let mut displacements: Vec<Vec<f64>> = (0..count)
+        .map(|m| {
+            let mut series = Vec::with_capacity(steps);
+            series.push(y[m]);
+            series
+        })
+        .collect();
     let mut known = vec![[0.0; 2]; count];
     let mut a = vec![0.0; count];
     let mut s = vec![0.0; count];
@@ -132,9 +134,9 @@ pub fn integrate_reduced(
         for m in 0..count {
             let c = &coefficients[m];
             let next = forces.series[m][i] / masses[m];
-            for r in 0..2 {
-                known[m][r] = c.e[r][0] * y[m] + c.e[r][1] * v[m] + (c.gamma0[r] - c.gamma1[r]) * load[m] + c.gamma1[r] * next;
-            }
+            known[m] = std::array::from_fn(|r| {
+                c.e[r][0] * y[m] + c.e[r][1] * v[m] + (c.gamma0[r] - c.gamma1[r]) * load[m] + c.gamma1[r] * next
+            });
             a[m] = known[m][1];
             // Predictor: the previous step's damper forces.
             s[m] = a[m] - c.gamma1[1] * modal_damper_force[m] / masses[m];

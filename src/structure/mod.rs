@@ -13,10 +13,10 @@ mod sections;
 pub use custom::CustomStructure;
 pub use frame::{FrameSpec, StoreySections};
 pub use modes::Modes;
-pub use presets::{frame40, FRAME40_YOUNGS_MODULUS};
+pub use presets::{FRAME40_YOUNGS_MODULUS, frame40};
 pub use sections::Section;
 
-use crate::error::{require_finite, require_positive, Error, Result};
+use crate::error::{Error, Result, require_finite, require_positive};
 use faer::{Mat, Side};
 
 /// A damper between two consecutive floors (or the ground and the first floor).
@@ -175,7 +175,10 @@ fn check_dampers(dampers: &[DamperPlacement], floors: usize) -> Result<()> {
     let groups = dampers.iter().map(|d| d.group + 1).max().unwrap_or(0);
     for g in 0..groups {
         if !dampers.iter().any(|d| d.group == g) {
-            return Err(Error::invalid("dampers", format!("group {} has no damper; groups must be numbered 1..G without gaps", g + 1)));
+            return Err(Error::invalid(
+                "dampers",
+                format!("group {} has no damper; groups must be numbered 1..G without gaps", g + 1),
+            ));
         }
     }
     Ok(())

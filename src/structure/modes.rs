@@ -25,12 +25,12 @@ impl Modes {
     pub fn of(structure: &Structure, count: usize) -> Result<Modes> {
         let n = structure.floors();
         if count == 0 || count > n {
-            return Err(Error::invalid("modes", format!("must be between 1 and the number of floors ({n}), got {count}")));
+            return Err(Error::invalid(
+                "modes",
+                format!("must be between 1 and the number of floors ({n}), got {count}"),
+            ));
         }
-        let llt = structure
-            .mass
-            .llt(Side::Lower)
-            .map_err(|_| Error::invalid("mass", "must be positive definite"))?;
+        let llt = structure.mass.llt(Side::Lower).map_err(|_| Error::invalid("mass", "must be positive definite"))?;
         let l = llt.L();
         // C = L⁻¹ K L⁻ᵀ: solve L X = K, then L Cᵀ = Xᵀ.
         let mut x = structure.stiffness.clone();
@@ -49,7 +49,10 @@ impl Modes {
         for m in 0..count {
             let lambda = eigen.S()[m];
             if lambda <= 0.0 {
-                return Err(Error::invalid("stiffness", "must be positive definite (a non-positive eigenvalue appeared)"));
+                return Err(Error::invalid(
+                    "stiffness",
+                    "must be positive definite (a non-positive eigenvalue appeared)",
+                ));
             }
             let largest = (0..n).map(|i| shapes[(i, m)].abs()).fold(0.0, f64::max);
             let r = shapes[(roof, m)];

@@ -1,7 +1,7 @@
 //! One-dimensional distributions by the parameters an engineer states (mean and standard deviation
 //! where that is how the paper gives them), with quantiles and the map to a standard variable.
 
-use crate::error::{require_finite, require_positive, Error, Result};
+use crate::error::{Error, Result, require_finite, require_positive};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 use statrs::function::gamma::gamma;
@@ -10,13 +10,27 @@ use statrs::function::gamma::gamma;
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "distribution", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Marginal {
-    Normal { mean: f64, sd: f64 },
+    Normal {
+        mean: f64,
+        sd: f64,
+    },
     /// Lognormal given by the mean and standard deviation of the variable itself.
-    Lognormal { mean: f64, sd: f64 },
-    Uniform { lower: f64, upper: f64 },
+    Lognormal {
+        mean: f64,
+        sd: f64,
+    },
+    Uniform {
+        lower: f64,
+        upper: f64,
+    },
     /// Fréchet (extreme value type II, location 0) given by its mean and standard deviation.
-    Frechet { mean: f64, sd: f64 },
-    Constant { value: f64 },
+    Frechet {
+        mean: f64,
+        sd: f64,
+    },
+    Constant {
+        value: f64,
+    },
 }
 
 /// The standard variable a marginal maps to, which fixes the orthonormal polynomial family.
@@ -59,7 +73,10 @@ impl Marginal {
                 require_finite(&format!("{field}.lower"), lower)?;
                 require_finite(&format!("{field}.upper"), upper)?;
                 if upper <= lower {
-                    return Err(Error::invalid(format!("{field}.upper"), format!("must exceed lower ({lower}), got {upper}")));
+                    return Err(Error::invalid(
+                        format!("{field}.upper"),
+                        format!("must exceed lower ({lower}), got {upper}"),
+                    ));
                 }
             }
             Marginal::Constant { value } => {

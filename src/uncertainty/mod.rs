@@ -6,5 +6,5 @@ mod model;
 mod sampling;
 
 pub use marginal::{Marginal, StandardSpace};
-pub use model::{parse_assignment, Input, InputModel};
-pub use sampling::{latin_hypercube, monte_carlo, rng_from_seed, stream_seed, Rng};
+pub use model::{Input, InputModel, parse_assignment};
+pub use sampling::{Rng, latin_hypercube, monte_carlo, rng_from_seed, stream_seed};

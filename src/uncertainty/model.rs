@@ -117,9 +117,8 @@ impl InputModel {
 
 /// Parses `NAME=VALUE` as written on a command line.
 pub fn parse_assignment(text: &str) -> Result<(String, f64)> {
-    let (name, value) = text
-        .split_once('=')
-        .ok_or_else(|| Error::invalid("fix", format!("expected NAME=VALUE, got `{text}`")))?;
+    let (name, value) =
+        text.split_once('=').ok_or_else(|| Error::invalid("fix", format!("expected NAME=VALUE, got `{text}`")))?;
     let name = name.trim();
     if name.is_empty() {
         return Err(Error::invalid("fix", format!("missing input name in `{text}`")));

@@ -45,6 +45,15 @@ pub fn monte_carlo(model: &InputModel, count: usize, rng: &mut Rng) -> Vec<Vec<f
         .collect()
 }
 
+/// An independent seed for stream `stream` of a run seeded with `seed` (SplitMix64 finaliser), so
+/// that sample k's storm is the same whichever thread draws it and however many samples there are.
+pub fn stream_seed(seed: u64, stream: u64) -> u64 {
+    let mut z = seed ^ stream.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+    z ^ (z >> 31)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -92,13 +101,4 @@ mod tests {
         let mean = samples.iter().map(|s| s[1]).sum::<f64>() / n as f64;
         assert!((mean - 30.0).abs() < 4.0 * 3.5 / (n as f64).sqrt(), "mean {mean}");
     }
-}
-
-/// An independent seed for stream `stream` of a run seeded with `seed` (SplitMix64 finaliser), so
-/// that sample k's storm is the same whichever thread draws it and however many samples there are.
-pub fn stream_seed(seed: u64, stream: u64) -> u64 {
-    let mut z = seed ^ stream.wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
 }

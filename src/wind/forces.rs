@@ -1,7 +1,7 @@
 //! Quasi-steady floor forces (Eq. 14, linearised) and the modal forces Q = Φᵀ f, by the full field
 //! or directly from the projected cross-spectral matrix.
 
-use super::spectral::{simulate, SpectralGrid};
+use super::spectral::{SpectralGrid, simulate};
 use super::spectrum::{FieldSpectrum, ProjectedSpectrum};
 use super::{StormGrid, WindSite};
 use crate::error::{Error, Result};
@@ -65,12 +65,8 @@ impl WindLoads {
             ));
         }
         let half_rho_c = 0.5 * site.air_density_kg_m3 * site.pressure_coefficient;
-        let exposure = structure
-            .storey_heights()
-            .iter()
-            .zip(&structure.floor_widths)
-            .map(|(h, w)| half_rho_c * h * w)
-            .collect();
+        let exposure =
+            structure.storey_heights().iter().zip(&structure.floor_widths).map(|(h, w)| half_rho_c * h * w).collect();
         Ok(WindLoads { site: site.clone(), heights: structure.floor_elevations.clone(), exposure })
     }
 
@@ -132,11 +128,8 @@ impl WindLoads {
             (0..shapes.ncols()).map(|m| (0..floors).map(|j| shapes[(j, m)] * mean_forces[j]).sum()).collect();
         let projected = ProjectedSpectrum { field: &spectrum, projection };
         let fluctuations = simulate(&projected, &self.grid(), storm.time_step, storm, rng)?;
-        let series = fluctuations
-            .into_iter()
-            .zip(&mean)
-            .map(|(q, mu)| q.into_iter().map(|x| x + mu).collect())
-            .collect();
+        let series =
+            fluctuations.into_iter().zip(&mean).map(|(q, mu)| q.into_iter().map(|x| x + mu).collect()).collect();
         Ok(ModalForces { mean, series })
     }
 }

@@ -10,5 +10,5 @@ mod spectrum;
 
 pub use forces::{FloorForces, ModalForces, WindLoads};
 pub use site::{StormGrid, WindSite};
-pub use spectral::{simulate, CrossSpectralDensity, SpectralGrid};
+pub use spectral::{CrossSpectralDensity, SpectralGrid, simulate};
 pub use spectrum::{FieldSpectrum, ProjectedSpectrum};

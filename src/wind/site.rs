@@ -1,6 +1,6 @@
 //! Site and discretisation parameters of the wind model, with the paper's values as defaults.
 
-use crate::error::{require_positive, Error, Result};
+use crate::error::{Error, Result, require_positive};
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
@@ -66,7 +66,10 @@ impl WindSite {
         require_positive("wind.pressure_coefficient", self.pressure_coefficient)?;
         require_positive("wind.cutoff_rad_s", self.cutoff_rad_s)?;
         if !(16..=1 << 16).contains(&self.frequencies) {
-            return Err(Error::invalid("wind.frequencies", format!("must be between 16 and 65536, got {}", self.frequencies)));
+            return Err(Error::invalid(
+                "wind.frequencies",
+                format!("must be between 16 and 65536, got {}", self.frequencies),
+            ));
         }
         require_positive("wind.field_generation_step_s", self.field_generation_step_s)?;
         if self.field_generation_step_s > PI / self.cutoff_rad_s {

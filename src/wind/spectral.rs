@@ -12,8 +12,8 @@ use crate::error::{Error, Result};
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
 use rand::RngExt;
-use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
+use rustfft::num_complex::Complex;
 use std::f64::consts::PI;
 
 /// A cross-spectral density evaluated along an arithmetic sequence of frequencies.
@@ -72,7 +72,8 @@ pub fn simulate(
     let dt_g = 2.0 * PI / (fft_len as f64 * domega);
     let direct = (dt_g - storm.time_step).abs() <= 1e-9 * storm.time_step;
     // Coarse instants p = −1 ..= last+1 so that cubic interpolation has neighbours at both ends.
-    let (first, count) = if direct { (0i64, storm.steps()) } else { (-1i64, (storm.duration / dt_g).floor() as usize + 4) };
+    let (first, count) =
+        if direct { (0i64, storm.steps()) } else { (-1i64, (storm.duration / dt_g).floor() as usize + 4) };
 
     let mut coarse = vec![vec![0.0; count]; n];
     let fft = FftPlanner::<f64>::new().plan_fft_inverse(fft_len);
@@ -225,10 +226,12 @@ mod tests {
     fn interpolation_reproduces_cubics_exactly_inside() {
         // Keys' kernel reproduces quadratics exactly.
         let dt_g = 0.1;
-        let coarse: Vec<f64> = (0..30).map(|q| {
-            let t = (q as f64 - 1.0) * dt_g;
-            1.0 + 2.0 * t - 3.0 * t * t
-        }).collect();
+        let coarse: Vec<f64> = (0..30)
+            .map(|q| {
+                let t = (q as f64 - 1.0) * dt_g;
+                1.0 + 2.0 * t - 3.0 * t * t
+            })
+            .collect();
         let storm = StormGrid { duration: 2.0, time_step: 0.01 };
         let fine = interpolate_cubic(&coarse, dt_g, &storm);
         for (i, y) in fine.iter().enumerate() {

@@ -1,8 +1,8 @@
 //! Target spectra: the two-sided (rad/s) Kaimal-type PSD of Eq. (19), the real coherence of Eq. (22),
 //! and the cross-spectral matrix of the modal forces projected from them.
 
-use super::spectral::CrossSpectralDensity;
 use super::WindSite;
+use super::spectral::CrossSpectralDensity;
 use faer::Mat;
 
 /// The cross-spectral density of the fluctuating speeds at a set of heights for one station speed.
@@ -27,7 +27,8 @@ impl FieldSpectrum {
             .zip(&mean_speeds)
             .map(|(&z, &v)| u_star * u_star * 50.0 * z / (std::f64::consts::PI * v))
             .collect();
-        let slope = heights.iter().zip(&mean_speeds).map(|(&z, &v)| 50.0 * z / (2.0 * std::f64::consts::PI * v)).collect();
+        let slope =
+            heights.iter().zip(&mean_speeds).map(|(&z, &v)| 50.0 * z / (2.0 * std::f64::consts::PI * v)).collect();
         let n = heights.len();
         let mut decay = vec![0.0; n * n];
         for j in 0..n {

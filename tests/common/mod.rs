@@ -2,8 +2,8 @@
 
 #![allow(dead_code)]
 
-use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
+use rustfft::num_complex::Complex;
 use std::f64::consts::PI;
 
 /// Welch estimate of the two-sided cross-spectral density S_xy(ω) in rad/s (so that
@@ -19,8 +19,10 @@ pub fn welch_cross(x: &[f64], y: &[f64], dt: f64, segment: usize) -> Vec<(f64, C
     let mut count = 0;
     let mut start = 0;
     while start + segment <= x.len() {
-        let mut fx: Vec<Complex<f64>> = (0..segment).map(|n| Complex::new((x[start + n] - mean_x) * window[n], 0.0)).collect();
-        let mut fy: Vec<Complex<f64>> = (0..segment).map(|n| Complex::new((y[start + n] - mean_y) * window[n], 0.0)).collect();
+        let mut fx: Vec<Complex<f64>> =
+            (0..segment).map(|n| Complex::new((x[start + n] - mean_x) * window[n], 0.0)).collect();
+        let mut fy: Vec<Complex<f64>> =
+            (0..segment).map(|n| Complex::new((y[start + n] - mean_y) * window[n], 0.0)).collect();
         fft.process(&mut fx);
         fft.process(&mut fy);
         for k in 0..=segment / 2 {

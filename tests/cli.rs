@@ -1,0 +1,164 @@
+//! The commands as a user runs them: outputs, reproducibility, and refusals of bad input with a
+//! message naming what is wrong and a non-zero exit.
+
+use serde_json::Value;
+use std::process::{Command, Output};
+
+fn windmeta(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_windmeta")).args(args).output().expect("the binary runs")
+}
+
+fn json(args: &[&str]) -> Value {
+    let out = windmeta(args);
+    assert!(out.status.success(), "{args:?}: {}", String::from_utf8_lossy(&out.stderr));
+    serde_json::from_slice(&out.stdout).expect("JSON on stdout")
+}
+
+fn refused(args: &[&str], expected: &str) {
+    let out = windmeta(args);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{args:?} should be refused as bad input; stderr: {stderr}");
+    assert!(stderr.contains(expected), "{args:?}: expected `{expected}` in: {stderr}");
+    assert!(!stderr.contains("panicked"), "{args:?} panicked: {stderr}");
+}
+
+#[test]
+fn modes_reports_the_papers_frequencies() {
+    let v = json(&["modes", "--preset", "frame40", "--json"]);
+    let w: Vec<f64> = v["frequencies_rad_s"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert_eq!(w.len(), 3);
+    for (w, expected) in w.iter().zip([1.44, 4.09, 7.09]) {
+        assert!((w / expected - 1.0).abs() < 0.01, "{w} vs {expected}");
+    }
+    let t = v["periods_s"][0].as_f64().unwrap();
+    assert!((t * w[0] - 2.0 * std::f64::consts::PI).abs() < 1e-9);
+    assert_eq!(v["shapes"][0].as_array().unwrap().len(), 40);
+    assert_eq!(v["shapes"][2][39].as_f64().unwrap(), 1.0);
+    assert!(v["modal_masses_kg"][0].as_f64().unwrap() > 1e6);
+}
+
+#[test]
+fn simulate_is_reproducible_and_honours_fixed_inputs() {
+    let args =
+        ["simulate", "--preset", "frame40-kn", "--seed", "4", "--duration", "30", "--fix", "wind_speed=40", "--json"];
+    let a = json(&args);
+    let b = json(&args);
+    assert_eq!(a["peak_roof_displacement_m"], b["peak_roof_displacement_m"]);
+    assert_eq!(a["inputs"]["wind_speed"].as_f64(), Some(40.0));
+    assert_eq!(a["inputs"]["damper_c1"].as_f64(), Some(5.0e4));
+    let slower = json(&[
+        "simulate",
+        "--preset",
+        "frame40-kn",
+        "--seed",
+        "4",
+        "--duration",
+        "30",
+        "--fix",
+        "wind_speed=20",
+        "--json",
+    ]);
+    assert!(slower["peak_roof_displacement_m"].as_f64() < a["peak_roof_displacement_m"].as_f64());
+    let dir = std::env::temp_dir().join(format!("windmeta-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("run.csv");
+    let out = windmeta(&["simulate", "--duration", "5", "--out", csv.to_str().unwrap()]);
+    assert!(out.status.success());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert_eq!(text.lines().next(), Some("t_s,roof_m"));
+    assert_eq!(text.lines().count(), 1 + 501);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn sample_peaks_reports_every_peak_and_summaries() {
+    let v = json(&[
+        "sample-peaks",
+        "--preset",
+        "frame40-kn",
+        "--samples",
+        "4",
+        "--duration",
+        "20",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    let peaks: Vec<f64> = v["peaks"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    assert_eq!(peaks.len(), 4);
+    let mean = peaks.iter().sum::<f64>() / 4.0;
+    assert!((v["mean"].as_f64().unwrap() - mean).abs() < 1e-12);
+    assert!(v["sd"].as_f64().unwrap() > 0.0);
+    assert!(v["quantiles"]["0.5"].as_f64().is_some());
+    // Same seed, same storms, whatever the thread scheduling.
+    let again = json(&[
+        "sample-peaks",
+        "--preset",
+        "frame40-kn",
+        "--samples",
+        "4",
+        "--duration",
+        "20",
+        "--seed",
+        "2",
+        "--json",
+    ]);
+    assert_eq!(v["peaks"], again["peaks"]);
+    let nominal = json(&["sample-peaks", "--samples", "2", "--duration", "20", "--nominal", "--json"]);
+    assert_eq!(nominal["peaks"].as_array().unwrap().len(), 2);
+}
+
+#[test]
+fn bad_input_is_refused_with_a_message() {
+    refused(&["simulate", "--fix", "stiffness=3"], "unknown input");
+    refused(&["simulate", "--fix", "wind_speed=fast"], "not a number");
+    refused(&["simulate", "--fix", "wind_speed"], "NAME=VALUE");
+    refused(&["simulate", "--fix", "damper_c1=-5"], "outside the support");
+    refused(&["simulate", "--fix", "wind_speed=NaN"], "finite");
+    refused(&["simulate", "--duration", "-1"], "duration_s");
+    refused(&["simulate", "--duration", "1e9"], "duration_s");
+    refused(&["simulate", "--time-step", "0"], "time_step_s");
+    refused(&["simulate", "--time-step", "2"], "cut-off");
+    refused(&["simulate", "--preset", "frame41"], "unknown preset");
+    refused(&["modes", "--modes", "41"], "modes");
+    refused(&["sample-peaks", "--samples", "0"], "samples");
+    let dir = std::env::temp_dir().join(format!("windmeta-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = dir.join("spec.json");
+    std::fs::write(
+        &spec,
+        r#"{"preset": "frame40", "inputs": {"wind_speed": {"distribution": "frechet", "mean": 30}}}"#,
+    )
+    .unwrap();
+    refused(&["simulate", "--spec", spec.to_str().unwrap()], "spec");
+    std::fs::write(
+        &spec,
+        r#"{"structure": {"mass": [[1e5, 0], [0, 1e5]], "stiffness": [[1e8, 2e8], [2e8, 1e8]],
+            "floor_elevations_m": [4, 8], "floor_widths_m": [20, 20]}}"#,
+    )
+    .unwrap();
+    refused(&["simulate", "--spec", spec.to_str().unwrap()], "stiffness: must be positive definite");
+    refused(&["simulate", "--spec", dir.join("missing.json").to_str().unwrap()], "cannot read");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A custom two-storey building from a spec file runs end to end.
+#[test]
+fn custom_structure_runs() {
+    let dir = std::env::temp_dir().join(format!("windmeta-custom-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let spec = dir.join("spec.json");
+    std::fs::write(
+        &spec,
+        r#"{"structure": {"mass": [[2e5, 0], [0, 2e5]], "stiffness": [[4e8, -2e8], [-2e8, 2e8]],
+            "floor_elevations_m": [4, 8], "floor_widths_m": [20, 20],
+            "dampers": [{"floor": 1, "group": 1, "cos_angle": 0.8}, {"floor": 2, "group": 1, "cos_angle": 0.8}]},
+           "modes": 2, "duration_s": 20}"#,
+    )
+    .unwrap();
+    let v = json(&["simulate", "--spec", spec.to_str().unwrap(), "--json"]);
+    assert!(v["peak_roof_displacement_m"].as_f64().unwrap() > 0.0);
+    assert!(v["inputs"]["damper_c1"].is_number());
+    assert!(v["inputs"].get("damper_c2").is_none());
+    std::fs::remove_dir_all(&dir).ok();
+}
