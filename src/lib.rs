@@ -13,5 +13,6 @@ pub mod error;
 mod linalg;
 pub mod problem;
 pub mod structure;
+pub mod surrogate;
 pub mod uncertainty;
 pub mod wind;

@@ -1,0 +1,439 @@
+//! NARX identification from input/output records: one-step-ahead regressors for LARS, least squares
+//! on a structure, and the refinement of the coefficients on the simulation error (Eq. 11).
+
+use super::lars::lars_path;
+use super::narx::{free_run, regressors, relative_error, rest_output, NarxTerm};
+use std::collections::BTreeSet;
+use crate::error::{Error, Result};
+use crate::linalg::{cholesky, cholesky_solve};
+use faer::prelude::SolveLstsq;
+use faer::Mat;
+use serde::{Deserialize, Serialize};
+
+/// One experiment of one mode, scaled: output, input and the input's mean (the rest load).
+#[derive(Debug, Clone)]
+pub struct Record {
+    pub y: Vec<f64>,
+    pub q: Vec<f64>,
+    pub q_rest: f64,
+}
+
+impl Record {
+    /// The measured history before t = 0: the reference starts at rest at y(0).
+    fn measured_rest(&self) -> (f64, f64) {
+        (self.y[0], self.q_rest)
+    }
+}
+
+/// Gram matrix and correlations of the one-step-ahead regression y(t) ~ g(z(t)) over t ≥ 1 for the
+/// non-constant `terms`, each column centred and scaled to unit norm, as LARS wants them.
+pub fn one_step_gram(terms: &[NarxTerm], record: &Record) -> (Vec<f64>, Vec<f64>) {
+    let p = terms.len();
+    let n = record.y.len();
+    let rest = record.measured_rest();
+    let mut row = vec![0.0; p];
+    let (mut sum, mut cross, mut sum_y, mut xy, mut count) = (vec![0.0; p], vec![0.0; p * p], 0.0, vec![0.0; p], 0.0);
+    for t in 1..n {
+        regressors(terms, &record.y, &record.q, t, rest, &mut row);
+        let y = record.y[t];
+        for i in 0..p {
+            sum[i] += row[i];
+            xy[i] += row[i] * y;
+            for j in 0..=i {
+                cross[i * p + j] += row[i] * row[j];
+            }
+        }
+        sum_y += y;
+        count += 1.0;
+    }
+    let mean: Vec<f64> = sum.iter().map(|s| s / count).collect();
+    let mean_y = sum_y / count;
+    let norm: Vec<f64> =
+        (0..p).map(|i| (cross[i * p + i] - count * mean[i] * mean[i]).max(0.0).sqrt().max(f64::MIN_POSITIVE)).collect();
+    let mut gram = vec![0.0; p * p];
+    for i in 0..p {
+        for j in 0..=i {
+            let v = (cross[i * p + j] - count * mean[i] * mean[j]) / (norm[i] * norm[j]);
+            gram[i * p + j] = v;
+            gram[j * p + i] = v;
+        }
+    }
+    let xty = (0..p).map(|i| (xy[i] - count * mean[i] * mean_y) / norm[i]).collect();
+    (gram, xty)
+}
+
+/// One-step-ahead least squares of `terms` on a record (QR, for the nearly collinear lagged outputs).
+pub fn least_squares(terms: &[NarxTerm], record: &Record) -> Result<Vec<f64>> {
+    let n = record.y.len();
+    let p = terms.len();
+    if n <= p + 1 {
+        return Err(Error::invalid("duration_s", "the storm is too short for the NARX model"));
+    }
+    let rest = record.measured_rest();
+    let mut x = Mat::<f64>::zeros(n - 1, p);
+    let mut row = vec![0.0; p];
+    for t in 1..n {
+        regressors(terms, &record.y, &record.q, t, rest, &mut row);
+        for (j, v) in row.iter().enumerate() {
+            x[(t - 1, j)] = *v;
+        }
+    }
+    let rhs = Mat::from_fn(n - 1, 1, |i, _| record.y[i + 1]);
+    let solution = x.qr().solve_lstsq(&rhs);
+    let theta: Vec<f64> = (0..p).map(|j| solution[(j, 0)]).collect();
+    if theta.iter().all(|v| v.is_finite()) {
+        Ok(theta)
+    } else {
+        Err(Error::Numerical("the one-step least-squares fit failed".into()))
+    }
+}
+
+/// Free run of a model on a record from the model's own rest state; its output series.
+pub fn simulate(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Result<Vec<f64>> {
+    let rest = rest_output(terms, theta, record.q_rest, record.y[0])?;
+    let mut out = vec![0.0; record.q.len()];
+    free_run(terms, theta, &record.q, (rest, record.q_rest), &mut out)?;
+    Ok(out)
+}
+
+/// Simulation (free-run) relative error of a model on a record; +∞ when it diverges.
+pub fn simulation_error(terms: &[NarxTerm], theta: &[f64], record: &Record) -> f64 {
+    simulate(terms, theta, record).map_or(f64::INFINITY, |y_hat| relative_error(&record.y, &y_hat))
+}
+
+/// The structure chosen for one mode, and how it was chosen.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StructureChoice {
+    pub terms: Vec<NarxTerm>,
+    /// Mean free-run relative error of the one-step fits of the chosen structure.
+    pub error: f64,
+    /// Distinct candidate structures evaluated.
+    pub candidates: usize,
+}
+
+/// Candidates within this factor of the best free-run error count as equally good; the one with
+/// fewest terms among them wins, since every term costs a polynomial chaos expansion.
+const PARSIMONY_FACTOR: f64 = 1.1;
+
+/// Structure selection after Mai et al.: LARS on the one-step-ahead regressors of every record gives
+/// a path of growing active sets; every prefix (with the constant) is a candidate; each candidate is
+/// fitted by one-step least squares on the `evaluation` records and scored by its mean free-run
+/// error; a candidate that diverges on any of them is rejected. The smallest candidate within
+/// [`PARSIMONY_FACTOR`] of the best is then pruned by backward elimination.
+pub fn select_structure(
+    dictionary: &[NarxTerm],
+    records: &[Record],
+    evaluation: &[Record],
+    max_terms: usize,
+) -> Result<StructureChoice> {
+    let non_constant: Vec<NarxTerm> = dictionary.iter().copied().filter(|t| !t.is_constant()).collect();
+    let has_constant = dictionary.iter().any(NarxTerm::is_constant);
+    let mut candidates: BTreeSet<Vec<NarxTerm>> = BTreeSet::new();
+    for record in records {
+        let (gram, xty) = one_step_gram(&non_constant, record);
+        for step in lars_path(&gram, &xty, max_terms.saturating_sub(has_constant as usize)) {
+            let mut set: Vec<NarxTerm> = step.active.iter().map(|&i| non_constant[i]).collect();
+            if has_constant {
+                set.push(NarxTerm::CONSTANT);
+            }
+            set.sort();
+            candidates.insert(set);
+        }
+    }
+    let mean_error = |terms: &[NarxTerm]| -> f64 {
+        let total: f64 = evaluation
+            .iter()
+            .map(|r| least_squares(terms, r).map_or(f64::INFINITY, |theta| simulation_error(terms, &theta, r)))
+            .sum();
+        total / evaluation.len() as f64
+    };
+    let scored: Vec<(f64, Vec<NarxTerm>)> =
+        candidates.iter().map(|terms| (mean_error(terms), terms.clone())).filter(|(e, _)| e.is_finite()).collect();
+    let best = scored.iter().map(|(e, _)| *e).fold(f64::INFINITY, f64::min);
+    let tolerance = best * PARSIMONY_FACTOR + 1e-15;
+    let (mut error, mut terms) = scored
+        .iter()
+        .filter(|(e, _)| *e <= tolerance)
+        .min_by(|a, b| a.1.len().cmp(&b.1.len()).then(a.0.total_cmp(&b.0)))
+        .cloned()
+        .ok_or_else(|| Error::Numerical("every candidate NARX structure diverged in free run".into()))?;
+    // Backward elimination: LARS prefixes need not contain the smallest adequate set (correlated
+    // input lags enter early), so drop terms while the error stays within the same tolerance.
+    loop {
+        let removal = (0..terms.len())
+            .filter(|&i| !terms[i].is_constant())
+            .map(|i| {
+                let mut fewer = terms.clone();
+                fewer.remove(i);
+                (mean_error(&fewer), fewer)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        match removal {
+            Some((e, fewer)) if e <= tolerance && fewer.len() > 1 => {
+                error = e;
+                terms = fewer;
+            }
+            _ => break,
+        }
+    }
+    Ok(StructureChoice { terms, error, candidates: candidates.len() })
+}
+
+/// How the coefficients are refined on the simulation error.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Refinement {
+    /// Levenberg-Marquardt with forward sensitivities of the recursion.
+    LevenbergMarquardt,
+    /// The paper's Nelder-Mead simplex.
+    NelderMead,
+    /// Keep the one-step-ahead least-squares coefficients.
+    None,
+}
+
+/// Refines `theta` on the sum of squared free-run errors over the record.
+pub fn refine(method: Refinement, terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64> {
+    match method {
+        Refinement::LevenbergMarquardt => levenberg_marquardt(terms, theta, record),
+        Refinement::NelderMead => nelder_mead(terms, theta, record),
+        Refinement::None => theta,
+    }
+}
+
+fn sum_of_squares(terms: &[NarxTerm], theta: &[f64], record: &Record) -> f64 {
+    match simulate(terms, theta, record) {
+        Ok(y_hat) => record.y.iter().zip(&y_hat).map(|(a, b)| (a - b).powi(2)).sum(),
+        Err(_) => f64::INFINITY,
+    }
+}
+
+/// Free run with forward sensitivities s_i(t) = ∂ŷ(t)/∂θ_i:
+/// s_i(t) = g_i(t) + Σ_k θ_k ∂g_k/∂ŷ(t − l_k) s_i(t − l_k), and at rest
+/// s_i = g_i(y*) / (1 − Σ_k θ_k ∂g_k/∂y(y*)) since the rest state y* moves with θ.
+/// Returns the normal equations JᵀJ, Jᵀr of r = y − ŷ and the sum of squares, or None on divergence.
+fn sensitivities(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Option<(Vec<f64>, Vec<f64>, f64)> {
+    let p = terms.len();
+    let n = record.y.len();
+    let q_rest = record.q_rest;
+    let rest = rest_output(terms, theta, q_rest, record.y[0]).ok()?;
+    let mut y_hat = vec![0.0; n];
+    let mut s = vec![0.0; n * p];
+    let slope: f64 = terms.iter().zip(theta).map(|(t, c)| c * t.output_derivative(rest, q_rest)).sum();
+    let rest_sensitivity: Vec<f64> = terms.iter().map(|t| t.value(rest, q_rest) / (1.0 - slope)).collect();
+    y_hat[0] = rest;
+    s[..p].copy_from_slice(&rest_sensitivity);
+    let mut jtj = vec![0.0; p * p];
+    let mut jtr = vec![0.0; p];
+    let mut sse = 0.0;
+    let accumulate = |t: usize, s: &[f64], y_hat: &[f64], jtj: &mut [f64], jtr: &mut [f64], sse: &mut f64| {
+        let r = record.y[t] - y_hat[t];
+        *sse += r * r;
+        let row = &s[t * p..(t + 1) * p];
+        for i in 0..p {
+            jtr[i] += row[i] * r;
+            for j in 0..=i {
+                jtj[i * p + j] += row[i] * row[j];
+            }
+        }
+    };
+    accumulate(0, &s, &y_hat, &mut jtj, &mut jtr, &mut sse);
+    for t in 1..n {
+        let mut value = 0.0;
+        let mut row = vec![0.0; p];
+        for (k, (term, c)) in terms.iter().zip(theta).enumerate() {
+            let y_lag = if term.output_lag > t { rest } else { y_hat[t - term.output_lag] };
+            let q_lag = if term.input_lag > t { q_rest } else { record.q[t - term.input_lag] };
+            let g = term.value(y_lag, q_lag);
+            value += c * g;
+            row[k] += g;
+            if term.output_power > 0 {
+                let dg = c * term.output_derivative(y_lag, q_lag);
+                let source = if term.output_lag > t { 0 } else { t - term.output_lag };
+                for i in 0..p {
+                    row[i] += dg * s[source * p + i];
+                }
+            }
+        }
+        if !(value.abs() <= super::narx::DIVERGENCE_BOUND) {
+            return None;
+        }
+        y_hat[t] = value;
+        s[t * p..(t + 1) * p].copy_from_slice(&row);
+        accumulate(t, &s, &y_hat, &mut jtj, &mut jtr, &mut sse);
+    }
+    for i in 0..p {
+        for j in 0..i {
+            jtj[j * p + i] = jtj[i * p + j];
+        }
+    }
+    Some((jtj, jtr, sse))
+}
+
+/// Levenberg-Marquardt on the simulation error, scaled by diag(JᵀJ) (Marquardt's variant).
+fn levenberg_marquardt(terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64> {
+    let p = terms.len();
+    let mut theta = theta;
+    let Some(mut current) = sensitivities(terms, &theta, record) else { return theta };
+    let mut lambda = 1e-3;
+    for _ in 0..200 {
+        let (jtj, jtr, sse) = &current;
+        let mut a = jtj.clone();
+        for i in 0..p {
+            a[i * p + i] += lambda * jtj[i * p + i].max(1e-300);
+        }
+        let mut step = jtr.clone();
+        if !cholesky(&mut a, p) {
+            lambda *= 10.0;
+            continue;
+        }
+        cholesky_solve(&a, p, &mut step);
+        let trial: Vec<f64> = theta.iter().zip(&step).map(|(t, d)| t + d).collect();
+        match sensitivities(terms, &trial, record) {
+            Some(next) if next.2 < *sse => {
+                let improvement = (sse - next.2) / sse;
+                theta = trial;
+                current = next;
+                lambda = (lambda / 3.0).max(1e-12);
+                if improvement < 1e-10 {
+                    break;
+                }
+            }
+            _ => {
+                lambda *= 4.0;
+                if lambda > 1e12 {
+                    break;
+                }
+            }
+        }
+    }
+    theta
+}
+
+/// Nelder-Mead (reflection 1, expansion 2, contraction ½, shrink ½; MATLAB's fminsearch start
+/// simplex θ₀ + 5 % per coordinate), stopping when the simplex has collapsed to relative 10⁻¹⁰ in
+/// both coordinates and values, or after 200·n iterations.
+fn nelder_mead(terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64> {
+    let n = theta.len();
+    let f = |x: &[f64]| sum_of_squares(terms, x, record);
+    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
+    simplex.push((theta.clone(), f(&theta)));
+    for i in 0..n {
+        let mut x = theta.clone();
+        x[i] = if x[i] != 0.0 { x[i] * 1.05 } else { 0.00025 };
+        let v = f(&x);
+        simplex.push((x, v));
+    }
+    let centroid = |s: &[(Vec<f64>, f64)]| -> Vec<f64> {
+        (0..n).map(|j| s[..n].iter().map(|(x, _)| x[j]).sum::<f64>() / n as f64).collect()
+    };
+    let along = |c: &[f64], x: &[f64], t: f64| -> Vec<f64> { c.iter().zip(x).map(|(c, x)| c + t * (x - c)).collect() };
+    for _ in 0..200 * n {
+        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+        let best = simplex[0].1;
+        let spread_f = simplex.iter().map(|s| (s.1 - best).abs()).fold(0.0, f64::max);
+        let spread_x = simplex
+            .iter()
+            .flat_map(|s| s.0.iter().zip(&simplex[0].0).map(|(a, b)| (a - b).abs() / b.abs().max(1e-12)))
+            .fold(0.0, f64::max);
+        if spread_f <= 1e-10 * best.abs().max(1e-300) && spread_x <= 1e-10 {
+            break;
+        }
+        let c = centroid(&simplex);
+        let worst = simplex[n].clone();
+        let reflected = along(&c, &worst.0, -1.0);
+        let fr = f(&reflected);
+        if fr < simplex[0].1 {
+            let expanded = along(&c, &worst.0, -2.0);
+            let fe = f(&expanded);
+            simplex[n] = if fe < fr { (expanded, fe) } else { (reflected, fr) };
+        } else if fr < simplex[n - 1].1 {
+            simplex[n] = (reflected, fr);
+        } else {
+            let (contracted, fc) = if fr < worst.1 {
+                let x = along(&c, &reflected, 0.5);
+                let v = f(&x);
+                (x, v)
+            } else {
+                let x = along(&c, &worst.0, 0.5);
+                let v = f(&x);
+                (x, v)
+            };
+            if fc < worst.1.min(fr) {
+                simplex[n] = (contracted, fc);
+            } else {
+                let best_x = simplex[0].0.clone();
+                for s in simplex.iter_mut().skip(1) {
+                    s.0 = along(&best_x, &s.0, 0.5);
+                    s.1 = f(&s.0);
+                }
+            }
+        }
+    }
+    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
+    simplex.swap_remove(0).0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::surrogate::narx::NarxOptions;
+    use crate::uncertainty::rng_from_seed;
+    use rand::RngExt;
+
+    fn arx() -> (Vec<NarxTerm>, Vec<f64>) {
+        let terms = vec![
+            NarxTerm::CONSTANT,
+            NarxTerm { output_lag: 0, output_power: 0, input_lag: 0, input_power: 1 },
+            NarxTerm { output_lag: 1, output_power: 1, input_lag: 0, input_power: 0 },
+            NarxTerm { output_lag: 2, output_power: 1, input_lag: 0, input_power: 0 },
+        ];
+        (terms, vec![0.002, 0.05, 1.6, -0.7])
+    }
+
+    /// Data from a known ARX(2) (exact, no noise) with a smooth random input.
+    fn record(theta: &[f64], terms: &[NarxTerm], seed: u64) -> Record {
+        let mut rng = rng_from_seed(seed);
+        let mut q = vec![0.0; 4000];
+        let mut state = 0.0;
+        for v in q.iter_mut() {
+            state = 0.95 * state + rng.random::<f64>() - 0.5;
+            *v = 1.0 + state;
+        }
+        let r = Record { y: vec![0.0; 4000], q, q_rest: 1.0 };
+        let y = simulate(terms, theta, &r).unwrap();
+        Record { y, ..r }
+    }
+
+    /// Structure selection over the paper's 10-term dictionary finds the true ARX terms, and least
+    /// squares on them recovers the coefficients.
+    #[test]
+    fn identification_recovers_a_known_arx_model() {
+        let (terms, theta) = arx();
+        let records: Vec<Record> = (1..=3).map(|seed| record(&theta, &terms, seed)).collect();
+        let choice = select_structure(&NarxOptions::default().dictionary(), &records, &records, 8).unwrap();
+        let mut truth = terms.clone();
+        truth.sort();
+        assert_eq!(choice.terms, truth);
+        assert!(choice.candidates >= 3);
+        let fitted = least_squares(&choice.terms, &records[0]).unwrap();
+        let expected: Vec<f64> = choice.terms.iter().map(|t| theta[terms.iter().position(|u| u == t).unwrap()]).collect();
+        for (a, b) in fitted.iter().zip(&expected) {
+            assert!((a - b).abs() < 1e-9, "{fitted:?}");
+        }
+        assert!(simulation_error(&choice.terms, &fitted, &records[0]) < 1e-15);
+    }
+
+    /// From perturbed coefficients both refinements return to the truth on the simulation error.
+    #[test]
+    fn refinements_recover_the_true_coefficients() {
+        let (terms, theta) = arx();
+        let data = record(&theta, &terms, 2);
+        let start: Vec<f64> = theta.iter().map(|v| v * 1.01).collect();
+        assert!(simulation_error(&terms, &start, &data) > 1e-3);
+        for method in [Refinement::LevenbergMarquardt, Refinement::NelderMead] {
+            let refined = refine(method, &terms, start.clone(), &data);
+            let error = simulation_error(&terms, &refined, &data);
+            assert!(error < 1e-8, "{method:?}: error {error}, θ = {refined:?}");
+        }
+    }
+}
