@@ -24,6 +24,8 @@ enum Command {
     Simulate(cli::SimulateArgs),
     /// Peak roof displacements of many storms through the reference model.
     SamplePeaks(cli::SamplePeaksArgs),
+    /// Calibrate a PC-NARX metamodel on a Latin-hypercube design of reference storms.
+    Calibrate(cli::CalibrateArgs),
     /// Medians of the stages of one full-size storm, measured side by side.
     Bench(cli::BenchArgs),
 }
@@ -35,6 +37,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => cli::simulate(args),
         Command::SamplePeaks(args) => cli::sample_peaks(args),
         Command::Bench(args) => cli::bench(args),
+        Command::Calibrate(args) => cli::calibrate(args),
     };
     match result {
         Ok(output) => {

@@ -92,6 +92,8 @@ impl StormRun {
 #[derive(Debug, Clone)]
 pub struct Problem {
     pub name: String,
+    /// The spec it was built from (inputs and storm as given, before later changes).
+    spec: ProblemSpec,
     pub structure: Structure,
     /// The retained modes at the reference stiffness and unit mass factor.
     pub modes: Modes,
@@ -185,7 +187,18 @@ impl Problem {
             return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {damper_exponent}")));
         }
         let storm = StormGrid::new(spec.duration_s.unwrap_or(900.0), spec.time_step_s.unwrap_or(0.01), &site)?;
-        Ok(Problem { name, structure, modes, all_modes, inputs, wind, damper_exponent, storm })
+        Ok(Problem { name, spec: spec.clone(), structure, modes, all_modes, inputs, wind, damper_exponent, storm })
+    }
+
+    /// A spec that rebuilds exactly this study: every input's marginal and the storm grid as they
+    /// are now.
+    pub fn resolved_spec(&self) -> ProblemSpec {
+        let mut spec = self.spec.clone();
+        spec.inputs = self.inputs.inputs.iter().map(|i| (i.name.clone(), i.marginal)).collect();
+        spec.duration_s = Some(self.storm.duration);
+        spec.time_step_s = Some(self.storm.time_step);
+        spec.modes = Some(self.modes.count());
+        spec
     }
 
     /// The same study on another storm grid.

@@ -2,13 +2,13 @@
 //! on a structure, and the refinement of the coefficients on the simulation error (Eq. 11).
 
 use super::lars::lars_path;
-use super::narx::{free_run, regressors, relative_error, rest_output, NarxTerm};
-use std::collections::BTreeSet;
+use super::narx::{NarxTerm, free_run, regressors, relative_error, rest_output};
 use crate::error::{Error, Result};
 use crate::linalg::{cholesky, cholesky_solve};
-use faer::prelude::SolveLstsq;
 use faer::Mat;
+use faer::prelude::SolveLstsq;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeSet;
 
 /// One experiment of one mode, scaled: output, input and the input's mean (the rest load).
 #[derive(Debug, Clone)]
@@ -416,7 +416,8 @@ mod tests {
         assert_eq!(choice.terms, truth);
         assert!(choice.candidates >= 3);
         let fitted = least_squares(&choice.terms, &records[0]).unwrap();
-        let expected: Vec<f64> = choice.terms.iter().map(|t| theta[terms.iter().position(|u| u == t).unwrap()]).collect();
+        let expected: Vec<f64> =
+            choice.terms.iter().map(|t| theta[terms.iter().position(|u| u == t).unwrap()]).collect();
         for (a, b) in fitted.iter().zip(&expected) {
             assert!((a - b).abs() < 1e-9, "{fitted:?}");
         }

@@ -48,14 +48,16 @@ pub fn lars_path(gram: &[f64], xty: &[f64], max_steps: usize) -> Vec<LarsStep> {
         let a_a = 1.0 / norm.sqrt();
         let w: Vec<f64> = q.iter().map(|x| a_a * x).collect();
         // a_j = Σ_{i∈A} G_{j,i} w_i for every column.
-        let a: Vec<f64> = (0..p).map(|col| active.iter().zip(&w).map(|(&i, wi)| gram[col * p + i] * wi).sum()).collect();
+        let a: Vec<f64> =
+            (0..p).map(|col| active.iter().zip(&w).map(|(&i, wi)| gram[col * p + i] * wi).sum()).collect();
         let mut gamma = big_c / a_a;
         let mut next = None;
         for col in 0..p {
             if active.contains(&col) {
                 continue;
             }
-            for candidate in [(big_c - correlation[col]) / (a_a - a[col]), (big_c + correlation[col]) / (a_a + a[col])] {
+            for candidate in [(big_c - correlation[col]) / (a_a - a[col]), (big_c + correlation[col]) / (a_a + a[col])]
+            {
                 if candidate > 1e-15 * gamma && candidate < gamma {
                     gamma = candidate;
                     next = Some(col);
@@ -103,7 +105,8 @@ mod tests {
         let fixture: Fixture =
             serde_json::from_str(include_str!("../../tests/fixtures/lars.json")).expect("fixture parses");
         let (n, p) = (fixture.x.len(), fixture.x[0].len());
-        let gram: Vec<f64> = (0..p * p).map(|k| (0..n).map(|r| fixture.x[r][k / p] * fixture.x[r][k % p]).sum()).collect();
+        let gram: Vec<f64> =
+            (0..p * p).map(|k| (0..n).map(|r| fixture.x[r][k / p] * fixture.x[r][k % p]).sum()).collect();
         let xty: Vec<f64> = (0..p).map(|c| (0..n).map(|r| fixture.x[r][c] * fixture.y[r]).sum()).collect();
         let path = lars_path(&gram, &xty, p);
         assert_eq!(path.last().unwrap().active, fixture.active);
@@ -111,7 +114,10 @@ mod tests {
         for (step, lars) in path.iter().enumerate() {
             for col in 0..p {
                 let expected = fixture.coefs[col][step + 1];
-                assert!((lars.coefficients[col] - expected).abs() < 1e-9 * (1.0 + expected.abs()), "step {step} col {col}");
+                assert!(
+                    (lars.coefficients[col] - expected).abs() < 1e-9 * (1.0 + expected.abs()),
+                    "step {step} col {col}"
+                );
             }
         }
     }

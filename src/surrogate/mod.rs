@@ -1,7 +1,15 @@
 //! PC-NARX metamodels (sections 3.2-3.3): NARX dynamics per retained mode whose coefficients are
 //! sparse polynomial-chaos expansions of the uncertain inputs.
 
+mod calibrate;
 pub mod identify;
 pub mod lars;
+mod metamodel;
 pub mod narx;
+mod parametrization;
 pub mod pce;
+
+pub use calibrate::{CalibrationOptions, MAX_EXPERIMENTS, ModeDiagnostics, Observer, Progress, Silent, calibrate};
+pub use identify::Refinement;
+pub use metamodel::{CalibrationSummary, Metamodel, ModalBasis, ModeModel, StageSeconds};
+pub use parametrization::Parametrization;

@@ -116,7 +116,15 @@ pub fn univariate(family: StandardSpace, xi: f64, degree: usize, out: &mut Vec<f
 pub fn candidate_terms(active: &[usize], degree: usize, q_norm: f64, max_interaction: usize) -> Vec<Term> {
     let mut terms: Vec<Term> = vec![vec![]];
     // Grow terms input by input: extend each partial term by a degree for the next input.
-    fn extend(active: &[usize], start: usize, current: &mut Term, degree: usize, q: f64, rank: usize, out: &mut Vec<Term>) {
+    fn extend(
+        active: &[usize],
+        start: usize,
+        current: &mut Term,
+        degree: usize,
+        q: f64,
+        rank: usize,
+        out: &mut Vec<Term>,
+    ) {
         for (k, &input) in active.iter().enumerate().skip(start) {
             if current.len() >= rank {
                 return;
@@ -188,7 +196,13 @@ impl SparsePce {
         let active: Vec<usize> = (0..families.len()).filter(|&i| families[i] != StandardSpace::Fixed).collect();
         let mean = targets.iter().sum::<f64>() / n as f64;
         let variance = targets.iter().map(|t| (t - mean).powi(2)).sum::<f64>() / n as f64;
-        let constant = SparsePce { families: families.clone(), terms: vec![vec![]], coefficients: vec![mean], degree: 0, loo_error: 0.0 };
+        let constant = SparsePce {
+            families: families.clone(),
+            terms: vec![vec![]],
+            coefficients: vec![mean],
+            degree: 0,
+            loo_error: 0.0,
+        };
         if active.is_empty() || variance <= 1e-28 * mean * mean || variance == 0.0 {
             return Ok(constant);
         }
@@ -337,7 +351,7 @@ fn forward_substitute(l: &[f64], k: usize, z: &mut [f64]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::uncertainty::{latin_hypercube, rng_from_seed, Input, Marginal};
+    use crate::uncertainty::{Input, Marginal, latin_hypercube, rng_from_seed};
     use std::f64::consts::PI;
 
     #[test]
@@ -345,7 +359,12 @@ mod tests {
         // E[ψ_m ψ_n] by midpoint quadrature of the density on a fine grid.
         let mut a = Vec::new();
         for (family, lo, hi, density) in [
-            (StandardSpace::Gaussian, -12.0, 12.0, (|x: f64| (-0.5 * x * x).exp() / (2.0 * PI).sqrt()) as fn(f64) -> f64),
+            (
+                StandardSpace::Gaussian,
+                -12.0,
+                12.0,
+                (|x: f64| (-0.5 * x * x).exp() / (2.0 * PI).sqrt()) as fn(f64) -> f64,
+            ),
             (StandardSpace::Uniform, -1.0, 1.0, (|_: f64| 0.5) as fn(f64) -> f64),
         ] {
             let steps = 200_000;
@@ -378,7 +397,9 @@ mod tests {
         assert_eq!(candidate_terms(&inputs, 10, 1.0, 2).len(), 1341);
         assert_eq!(candidate_terms(&inputs[..3], 3, 1.0, 3).len(), 20); // C(3+3, 3)
         let hyperbolic = candidate_terms(&inputs[..2], 4, 0.5, 2);
-        assert!(hyperbolic.iter().all(|t| t.iter().map(|&(_, d)| (d as f64).sqrt()).sum::<f64>().powi(2) <= 4.0 + 1e-9));
+        assert!(
+            hyperbolic.iter().all(|t| t.iter().map(|&(_, d)| (d as f64).sqrt()).sum::<f64>().powi(2) <= 4.0 + 1e-9)
+        );
     }
 
     /// Ishigami (a = 7, b = 0.1) on U(−π, π)³: mean a/2 = 3.5 and variance
@@ -387,11 +408,14 @@ mod tests {
     #[test]
     fn ishigami_moments() {
         let model = InputModel::new(
-            (1..=3).map(|i| Input { name: format!("x{i}"), marginal: Marginal::Uniform { lower: -PI, upper: PI } }).collect(),
+            (1..=3)
+                .map(|i| Input { name: format!("x{i}"), marginal: Marginal::Uniform { lower: -PI, upper: PI } })
+                .collect(),
         )
         .unwrap();
         let x = latin_hypercube(&model, 400, &mut rng_from_seed(7));
-        let y: Vec<f64> = x.iter().map(|x| x[0].sin() + 7.0 * x[1].sin().powi(2) + 0.1 * x[2].powi(4) * x[0].sin()).collect();
+        let y: Vec<f64> =
+            x.iter().map(|x| x[0].sin() + 7.0 * x[1].sin().powi(2) + 0.1 * x[2].powi(4) * x[0].sin()).collect();
         let xi: Vec<Vec<f64>> = x.iter().map(|x| model.to_standard(x)).collect();
         let options = PceOptions { max_degree: 14, max_interaction: 3, ..Default::default() };
         let pce = SparsePce::fit(&model, &xi, &y, &options).unwrap();

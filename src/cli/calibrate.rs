@@ -1,0 +1,113 @@
+//! `windmeta calibrate`: a PC-NARX metamodel from a Latin-hypercube design of reference storms.
+
+use super::ProblemArgs;
+use crate::error::{Error, Result};
+use crate::surrogate::{CalibrationOptions, Observer, Progress, Refinement, calibrate as run_calibration};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use std::sync::Mutex;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum RefinementChoice {
+    /// Levenberg-Marquardt with sensitivities of the recursion (default).
+    Lm,
+    /// The paper's Nelder-Mead simplex.
+    NelderMead,
+    /// One-step least squares only.
+    None,
+}
+
+#[derive(Debug, Clone, Args)]
+pub struct CalibrateArgs {
+    #[command(flatten)]
+    pub problem: ProblemArgs,
+    /// Experiments K of the Latin-hypercube design.
+    #[arg(long, default_value_t = 200)]
+    pub experiments: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Refinement of the coefficients on the simulation error.
+    #[arg(long, value_enum, default_value = "lm")]
+    pub refinement: RefinementChoice,
+    /// Allow products of output and input powers in the NARX dictionary (22 candidates).
+    #[arg(long)]
+    pub cross_terms: bool,
+    /// Where to write the metamodel (JSON).
+    #[arg(long)]
+    pub out: PathBuf,
+}
+
+/// Prints each stage once and experiment counts every 10 %, on standard error.
+struct Terminal {
+    started: Instant,
+    last: Mutex<String>,
+}
+
+impl Observer for Terminal {
+    fn progress(&self, progress: Progress) {
+        let line = match progress {
+            Progress::Experiments { done, total } if done == total || done % (total / 10).max(1) == 0 => {
+                format!("experiments {done}/{total}")
+            }
+            Progress::Structure { mode } => format!("mode {mode}: structure selection"),
+            Progress::Coefficients { mode, done, total } if done == total => {
+                format!("mode {mode}: coefficients of {total} experiments")
+            }
+            Progress::Expansion { mode } => format!("mode {mode}: polynomial chaos expansions"),
+            _ => return,
+        };
+        let mut last = self.last.lock().expect("progress lock");
+        if *last != line {
+            eprintln!("[{:>7.1} s] {line}", self.started.elapsed().as_secs_f64());
+            *last = line;
+        }
+    }
+}
+
+pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
+    let problem = args.problem.problem()?;
+    let mut options = CalibrationOptions { experiments: args.experiments, seed: args.seed, ..Default::default() };
+    options.refinement = match args.refinement {
+        RefinementChoice::Lm => Refinement::LevenbergMarquardt,
+        RefinementChoice::NelderMead => Refinement::NelderMead,
+        RefinementChoice::None => Refinement::None,
+    };
+    options.narx.cross_terms = args.cross_terms;
+    let observer = Terminal { started: Instant::now(), last: Mutex::new(String::new()) };
+    let metamodel = run_calibration(&problem, &options, &observer)?;
+    let json = serde_json::to_string(&metamodel).expect("a metamodel serialises");
+    std::fs::write(&args.out, json).map_err(|e| Error::invalid("out", format!("{}: {e}", args.out.display())))?;
+    let c = &metamodel.calibration;
+    let mut out = format!(
+        "{}: {} experiments of {} s, seed {}, in {:.1} s (experiments {:.1} s, structure {:.1} s, coefficients {:.1} s, expansions {:.1} s)\n",
+        problem.name,
+        options.experiments,
+        problem.storm.duration,
+        options.seed,
+        c.seconds.total,
+        c.seconds.experiments,
+        c.seconds.structure,
+        c.seconds.coefficients,
+        c.seconds.expansion
+    );
+    for d in &c.modes {
+        out += &format!(
+            "mode {}: terms {{{}}}, calibration mean relative error NARX {:.2e}, PC-NARX {:.2e}, PCE terms {:?}, worst LOO {:.1e}{}\n",
+            d.mode,
+            d.selected_terms.join(", "),
+            d.narx_mean_relative_error,
+            d.pc_narx_mean_relative_error,
+            d.coefficient_pce_terms,
+            d.coefficient_loo_errors.iter().fold(0.0f64, |m, v| m.max(*v)),
+            if d.diverged_experiments > 0 { format!(", {} diverged", d.diverged_experiments) } else { String::new() }
+        );
+    }
+    out += &format!(
+        "mean over modes: NARX {:.2e}, PC-NARX {:.2e}\nmetamodel written to {}\n",
+        c.narx_mean_relative_error,
+        c.pc_narx_mean_relative_error,
+        args.out.display()
+    );
+    Ok(out)
+}

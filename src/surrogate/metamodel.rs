@@ -1,0 +1,133 @@
+//! The metamodel as a value: everything needed to reproduce its predictions, serialisable and
+//! versioned.
+
+use super::Parametrization;
+use super::narx::{NarxTerm, free_run, rest_output};
+use super::pce::SparsePce;
+use super::{CalibrationOptions, ModeDiagnostics};
+use crate::error::{Error, Result};
+use crate::problem::{Problem, ProblemSpec};
+use crate::wind::ModalForces;
+use serde::{Deserialize, Serialize};
+
+pub const FORMAT: &str = "windmeta-pc-narx";
+pub const FORMAT_VERSION: u32 = 1;
+
+/// The PC-NARX model of one modal coordinate.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModeModel {
+    /// Selected NARX terms, in the order of `coefficients`.
+    pub terms: Vec<NarxTerm>,
+    /// The terms written out, e.g. `y(t-1)` (for people; `terms` is authoritative).
+    pub term_names: Vec<String>,
+    /// The NARX works on y / output_scale and Q / input_scale (m and N).
+    pub output_scale: f64,
+    pub input_scale: f64,
+    /// What the expansions are of (see [`Parametrization`]).
+    pub parametrization: Parametrization,
+    /// Polynomial chaos expansion of each expanded coefficient over the standard-space inputs.
+    pub coefficients: Vec<SparsePce>,
+}
+
+/// Roof-normalised modes the metamodel was calibrated on (shapes fixed across samples).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ModalBasis {
+    pub frequencies_rad_s: Vec<f64>,
+    pub modal_masses_kg: Vec<f64>,
+    /// shapes[mode][floor].
+    pub shapes: Vec<Vec<f64>>,
+}
+
+/// How the metamodel came about and how well it fits its own experiments.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationSummary {
+    pub options: CalibrationOptions,
+    pub modes: Vec<ModeDiagnostics>,
+    /// Mean over modes of the NARX-only calibration mean relative error.
+    pub narx_mean_relative_error: f64,
+    /// Mean over modes of the full PC-NARX calibration mean relative error.
+    pub pc_narx_mean_relative_error: f64,
+    /// Wall time of each stage (s).
+    pub seconds: StageSeconds,
+}
+
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct StageSeconds {
+    pub experiments: f64,
+    pub structure: f64,
+    pub coefficients: f64,
+    pub expansion: f64,
+    pub total: f64,
+}
+
+/// A calibrated PC-NARX metamodel.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Metamodel {
+    pub format: String,
+    pub version: u32,
+    /// The study, fully resolved: rebuilding it gives the same inputs, modes, wind and storm grid.
+    pub problem: ProblemSpec,
+    pub modes: ModalBasis,
+    pub models: Vec<ModeModel>,
+    pub calibration: CalibrationSummary,
+}
+
+impl Metamodel {
+    /// Reads a metamodel and checks that this build can use it.
+    pub fn from_json(text: &str) -> Result<Metamodel> {
+        let value: serde_json::Value =
+            serde_json::from_str(text).map_err(|e| Error::invalid("metamodel", format!("not JSON: {e}")))?;
+        if value.get("format").and_then(|f| f.as_str()) != Some(FORMAT) {
+            return Err(Error::invalid("metamodel", format!("not a {FORMAT} file")));
+        }
+        match value.get("version").and_then(|v| v.as_u64()) {
+            Some(v) if v == FORMAT_VERSION as u64 => {}
+            other => {
+                return Err(Error::invalid(
+                    "metamodel",
+                    format!("version {other:?} is not supported (this build reads {FORMAT_VERSION})"),
+                ));
+            }
+        }
+        serde_json::from_value(value).map_err(|e| Error::invalid("metamodel", e.to_string()))
+    }
+
+    /// Rebuilds the study the metamodel was calibrated on.
+    pub fn problem(&self) -> Result<Problem> {
+        Problem::from_spec(&self.problem)
+    }
+
+    /// The NARX coefficients of every mode at a physical input sample.
+    pub fn coefficients(&self, problem: &Problem, x: &[f64]) -> Vec<Vec<f64>> {
+        let xi = problem.inputs.to_standard(x);
+        self.models
+            .iter()
+            .map(|m| {
+                let phi: Vec<f64> = m.coefficients.iter().map(|pce| pce.evaluate(&xi)).collect();
+                m.parametrization.inverse(&m.terms, &phi)
+            })
+            .collect()
+    }
+
+    /// Free-runs every mode on the sample's modal forces; modal displacement histories (m). A
+    /// diverging free run is an error, never a result.
+    pub fn predict(&self, problem: &Problem, x: &[f64], forces: &ModalForces) -> Result<Vec<Vec<f64>>> {
+        problem.inputs.check_sample(x)?;
+        let theta = self.coefficients(problem, x);
+        let mut out = Vec::with_capacity(self.models.len());
+        for (m, (model, theta)) in self.models.iter().zip(&theta).enumerate() {
+            let q: Vec<f64> = forces.series[m].iter().map(|v| v / model.input_scale).collect();
+            let q_rest = forces.mean[m] / model.input_scale;
+            let guess = forces.mean[m]
+                / (self.modes.modal_masses_kg[m] * self.modes.frequencies_rad_s[m].powi(2))
+                / model.output_scale;
+            let rest = rest_output(&model.terms, theta, q_rest, guess)?;
+            let mut y = vec![0.0; q.len()];
+            free_run(&model.terms, theta, &q, (rest, q_rest), &mut y)
+                .map_err(|e| Error::Numerical(format!("mode {}: {e}", m + 1)))?;
+            y.iter_mut().for_each(|v| *v *= model.output_scale);
+            out.push(y);
+        }
+        Ok(out)
+    }
+}
