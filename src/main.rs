@@ -26,6 +26,10 @@ enum Command {
     SamplePeaks(cli::SamplePeaksArgs),
     /// Calibrate a PC-NARX metamodel on a Latin-hypercube design of reference storms.
     Calibrate(cli::CalibrateArgs),
+    /// Validate a metamodel against the reference on fresh samples.
+    Validate(cli::ValidateArgs),
+    /// Exceedance curve of a peak response, sampled from a metamodel.
+    Exceedance(cli::ExceedanceArgs),
     /// Medians of the stages of one full-size storm, measured side by side.
     Bench(cli::BenchArgs),
 }
@@ -38,6 +42,8 @@ fn main() -> ExitCode {
         Command::SamplePeaks(args) => cli::sample_peaks(args),
         Command::Bench(args) => cli::bench(args),
         Command::Calibrate(args) => cli::calibrate(args),
+        Command::Validate(args) => cli::validate(args),
+        Command::Exceedance(args) => cli::exceedance(args),
     };
     match result {
         Ok(output) => {

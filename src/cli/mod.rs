@@ -1,16 +1,33 @@
-//! The offline commands: what `windmeta modes`, `simulate`, `sample-peaks` and `bench` do, as functions of
-//! their parsed arguments. `main.rs` only parses and dispatches.
+//! The offline commands: what `windmeta modes`, `simulate`, `sample-peaks`, `calibrate`, `validate`,
+//! `exceedance` and `bench` do, as functions of their parsed arguments. `main.rs` only parses and dispatches.
 
 mod args;
 mod bench;
 mod calibrate;
+mod exceedance;
 mod modes;
 mod peaks;
 mod simulate;
+mod validate;
 
 pub use args::ProblemArgs;
 pub use bench::{BenchArgs, BenchRow, bench, physics_rows, table};
 pub use calibrate::{CalibrateArgs, calibrate};
+pub use exceedance::{ExceedanceArgs, exceedance};
 pub use modes::{ModesArgs, modes};
 pub use peaks::{SamplePeaksArgs, sample_peaks};
 pub use simulate::{SimulateArgs, simulate};
+pub use validate::{ValidateArgs, validate};
+
+use crate::error::{Error, Result};
+use crate::problem::Problem;
+use crate::surrogate::Metamodel;
+
+/// Reads a metamodel file and rebuilds its study.
+fn read_metamodel(path: &std::path::Path) -> Result<(Metamodel, Problem)> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Error::invalid("model", format!("cannot read {}: {e}", path.display())))?;
+    let metamodel = Metamodel::from_json(&text)?;
+    let problem = metamodel.problem()?;
+    Ok((metamodel, problem))
+}

@@ -30,7 +30,7 @@ pub struct CalibrationOptions {
     pub selection_experiments: usize,
     /// How the experiments' wind is generated.
     pub wind: WindPath,
-    /// What the expansions are of; by default gains whenever the structure is autoregressive.
+    /// What the expansions are of; by default the stable gains whenever the experiments admit them.
     pub parametrization: Option<Parametrization>,
 }
 
@@ -72,10 +72,26 @@ impl CalibrationOptions {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "stage", rename_all = "snake_case")]
 pub enum Progress {
-    Experiments { done: usize, total: usize },
-    Structure { mode: usize },
-    Coefficients { mode: usize, done: usize, total: usize },
-    Expansion { mode: usize },
+    Experiments {
+        done: usize,
+        total: usize,
+    },
+    Structure {
+        mode: usize,
+    },
+    Coefficients {
+        mode: usize,
+        done: usize,
+        total: usize,
+    },
+    Expansion {
+        mode: usize,
+    },
+    /// Sampling or validation storms done.
+    Samples {
+        done: usize,
+        total: usize,
+    },
 }
 
 /// Who watches a calibration: progress reports and a way to stop it.
@@ -224,7 +240,8 @@ pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn
         check_cancel(observer)?;
         observer.progress(Progress::Expansion { mode: mode + 1 });
         let stage = Instant::now();
-        let parametrization = options.parametrization.unwrap_or_else(|| Parametrization::for_terms(&terms));
+        let thetas: Vec<Vec<f64>> = fitted.iter().map(|(theta, _)| theta.clone()).collect();
+        let parametrization = options.parametrization.unwrap_or_else(|| Parametrization::choose(&terms, &thetas));
         let expanded: Vec<Vec<f64>> = fitted.iter().map(|(theta, _)| parametrization.forward(&terms, theta)).collect();
         let expansions: Vec<SparsePce> = (0..terms.len())
             .into_par_iter()

@@ -22,6 +22,10 @@ pub enum Parametrization {
     Direct,
     /// s = 1 − Σ a_j, the remaining autoregressive coefficients, and gains θ_i / s.
     Gains,
+    /// As `Gains`, with ln s in place of s and ln(1 + a_n) in place of the autoregressive
+    /// coefficient of the longest lag. For an AR(2) part, s > 0 and 1 + a₂ > 0 are its stability
+    /// conditions (the third, a₂ − a₁ < 1, holds near a₂ ≈ −1), so every prediction is stable.
+    StableGains,
 }
 
 fn linear_outputs(terms: &[NarxTerm]) -> Vec<usize> {
@@ -39,9 +43,18 @@ fn linear_inputs(terms: &[NarxTerm]) -> Vec<usize> {
 }
 
 impl Parametrization {
-    /// The best available for a structure: gains when it has an autoregressive term.
-    pub fn for_terms(terms: &[NarxTerm]) -> Parametrization {
-        if linear_outputs(terms).is_empty() { Parametrization::Direct } else { Parametrization::Gains }
+    /// The best available for a structure and the coefficients of its experiments: stable gains
+    /// when every experiment admits the logarithms, else gains, else the coefficients themselves.
+    pub fn choose(terms: &[NarxTerm], experiments: &[Vec<f64>]) -> Parametrization {
+        let linear = linear_outputs(terms);
+        if linear.is_empty() {
+            return Parametrization::Direct;
+        }
+        let admits_logs = experiments.iter().all(|theta| {
+            let s = 1.0 - linear.iter().map(|&i| theta[i]).sum::<f64>();
+            s > 0.0 && (linear.len() < 2 || 1.0 + theta[*linear.last().unwrap()] > 0.0)
+        });
+        if admits_logs { Parametrization::StableGains } else { Parametrization::Gains }
     }
 
     /// NARX coefficients → expanded coefficients.
@@ -66,6 +79,13 @@ impl Parametrization {
         if let Some(&first) = inputs.first() {
             phi[first] = inputs.iter().map(|&i| theta[i]).sum::<f64>() / s;
         }
+        if self == Parametrization::StableGains {
+            phi[linear[0]] = s.ln();
+            if linear.len() >= 2 {
+                let last = *linear.last().unwrap();
+                phi[last] = (1.0 + theta[last]).ln();
+            }
+        }
         phi
     }
 
@@ -74,6 +94,14 @@ impl Parametrization {
         let linear = linear_outputs(terms);
         if self == Parametrization::Direct || linear.is_empty() {
             return phi.to_vec();
+        }
+        let mut phi = phi.to_vec();
+        if self == Parametrization::StableGains {
+            phi[linear[0]] = phi[linear[0]].exp();
+            if linear.len() >= 2 {
+                let last = *linear.last().unwrap();
+                phi[last] = phi[last].exp() - 1.0;
+            }
         }
         let s = phi[linear[0]];
         let others: f64 = linear[1..].iter().map(|&i| phi[i]).sum();
@@ -106,14 +134,15 @@ mod tests {
         let d = NarxOptions { cross_terms: true, ..Default::default() }.dictionary();
         let theta: Vec<f64> =
             (0..d.len()).map(|i| 0.01 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
-        let p = Parametrization::for_terms(&d);
-        assert_eq!(p, Parametrization::Gains);
-        let back = p.inverse(&d, &p.forward(&d, &theta));
-        for (a, b) in theta.iter().zip(&back) {
-            assert!((a - b).abs() < 1e-15);
+        for p in [Parametrization::Gains, Parametrization::StableGains, Parametrization::Direct] {
+            let back = p.inverse(&d, &p.forward(&d, &theta));
+            for (a, b) in theta.iter().zip(&back) {
+                assert!((a - b).abs() < 1e-14, "{p:?}: {theta:?} vs {back:?}");
+            }
         }
+        assert_eq!(Parametrization::choose(&d, std::slice::from_ref(&theta)), Parametrization::StableGains);
         // A structure without autoregressive terms expands the coefficients directly.
         let static_terms = [NarxTerm::CONSTANT, d[1]];
-        assert_eq!(Parametrization::for_terms(&static_terms), Parametrization::Direct);
+        assert_eq!(Parametrization::choose(&static_terms, &[vec![1.0, 2.0]]), Parametrization::Direct);
     }
 }

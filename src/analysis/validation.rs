@@ -1,0 +1,149 @@
+//! Validation of a metamodel against the reference model on fresh samples (the paper's section
+//! 4.3.2): the same inputs and the same storm through both, then errors, peak correlation (Fig. 6)
+//! and the exceedance curves of the peaks (Fig. 7).
+
+use super::exceedance::{ExceedanceCurve, automatic_thresholds, exceedance_curve, max_exceedance_gap};
+use super::{Response, quantile};
+use crate::dynamics::integrate_reduced;
+use crate::error::{Error, Result};
+use crate::problem::Problem;
+use crate::surrogate::narx::relative_error;
+use crate::surrogate::{Metamodel, Observer, Progress};
+use crate::uncertainty::{monte_carlo, rng_from_seed, stream_seed};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// What a validation measured.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ValidationReport {
+    pub samples: usize,
+    pub seed: u64,
+    /// Pearson correlation of the peak roof displacements, reference against metamodel.
+    pub peak_correlation: f64,
+    /// Full PC-NARX on the validation samples: mean over samples of Σ(u − û)²/Σ(u − ū)² of the roof.
+    pub mean_relative_error: f64,
+    /// The same per modal coordinate.
+    pub mode_mean_relative_errors: Vec<f64>,
+    /// Median over samples of |peak_meta − peak_ref| / peak_ref.
+    pub median_peak_relative_error: f64,
+    /// 95th percentile of the same.
+    pub p95_peak_relative_error: f64,
+    /// From the calibration: NARX-only mean relative error, mean over modes.
+    pub calibration_mean_relative_error: f64,
+    /// Largest vertical gap between the two empirical exceedance curves of the roof peak.
+    pub max_exceedance_gap: f64,
+    pub reference_exceedance: ExceedanceCurve,
+    pub metamodel_exceedance: ExceedanceCurve,
+    pub reference_peak: Vec<f64>,
+    pub metamodel_peak: Vec<f64>,
+    /// Median wall time per sample (s) of the reference integration and of the metamodel free run.
+    pub reference_seconds_per_sample: f64,
+    pub metamodel_seconds_per_sample: f64,
+}
+
+fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let va: f64 = a.iter().map(|x| (x - ma).powi(2)).sum();
+    let vb: f64 = b.iter().map(|y| (y - mb).powi(2)).sum();
+    cov / (va * vb).sqrt()
+}
+
+struct SampleResult {
+    reference_peak: f64,
+    metamodel_peak: f64,
+    roof_error: f64,
+    mode_errors: Vec<f64>,
+    reference_seconds: f64,
+    metamodel_seconds: f64,
+}
+
+/// Runs `samples` fresh Monte Carlo samples through the reference and the metamodel.
+pub fn validate(
+    metamodel: &Metamodel,
+    problem: &Problem,
+    samples: usize,
+    seed: u64,
+    observer: &dyn Observer,
+) -> Result<ValidationReport> {
+    if !(2..=100_000).contains(&samples) {
+        return Err(Error::invalid("samples", format!("must be between 2 and 100000, got {samples}")));
+    }
+    let xs = monte_carlo(&problem.inputs, samples, &mut rng_from_seed(seed));
+    let path = metamodel.calibration.options.wind;
+    let roof = Response::Displacement { floor: problem.structure.floors() };
+    let shapes = &metamodel.modes.shapes;
+    let done = AtomicUsize::new(0);
+    let results: Vec<SampleResult> = xs
+        .par_iter()
+        .enumerate()
+        .map(|(k, x)| {
+            if observer.cancelled() {
+                return Err(Error::Cancelled);
+            }
+            let p = problem.parameters(x)?;
+            let forces = problem.modal_forces(&p, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
+            let started = Instant::now();
+            let reference = integrate_reduced(
+                &problem.sample_modes(&p),
+                p.damping_ratio,
+                &problem.dampers(&p)?,
+                &forces,
+                problem.storm.time_step,
+            )?;
+            let reference_seconds = started.elapsed().as_secs_f64();
+            let started = Instant::now();
+            let predicted = metamodel
+                .predict(problem, x, &forces)
+                .map_err(|e| Error::Numerical(format!("validation sample {k}: {e}")))?;
+            let metamodel_seconds = started.elapsed().as_secs_f64();
+            let mode_errors =
+                reference.displacements.iter().zip(&predicted).map(|(y, y_hat)| relative_error(y, y_hat)).collect();
+            let (u, u_hat) = (roof.history(shapes, &reference.displacements), roof.history(shapes, &predicted));
+            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });
+            Ok(SampleResult {
+                reference_peak: u.iter().fold(0.0, |m, v| m.max(v.abs())),
+                metamodel_peak: u_hat.iter().fold(0.0, |m, v| m.max(v.abs())),
+                roof_error: relative_error(&u, &u_hat),
+                mode_errors,
+                reference_seconds,
+                metamodel_seconds,
+            })
+        })
+        .collect::<Result<_>>()?;
+    let n = results.len() as f64;
+    let reference_peak: Vec<f64> = results.iter().map(|r| r.reference_peak).collect();
+    let metamodel_peak: Vec<f64> = results.iter().map(|r| r.metamodel_peak).collect();
+    let mut peak_errors: Vec<f64> =
+        results.iter().map(|r| (r.metamodel_peak - r.reference_peak).abs() / r.reference_peak).collect();
+    peak_errors.sort_by(f64::total_cmp);
+    let modes = metamodel.models.len();
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        quantile(&v, 0.5)
+    };
+    let all: Vec<f64> = reference_peak.iter().chain(&metamodel_peak).copied().collect();
+    let thresholds = automatic_thresholds(&all, 60);
+    Ok(ValidationReport {
+        samples,
+        seed,
+        peak_correlation: pearson(&reference_peak, &metamodel_peak),
+        mean_relative_error: results.iter().map(|r| r.roof_error).sum::<f64>() / n,
+        mode_mean_relative_errors: (0..modes)
+            .map(|m| results.iter().map(|r| r.mode_errors[m]).sum::<f64>() / n)
+            .collect(),
+        median_peak_relative_error: quantile(&peak_errors, 0.5),
+        p95_peak_relative_error: quantile(&peak_errors, 0.95),
+        calibration_mean_relative_error: metamodel.calibration.narx_mean_relative_error,
+        max_exceedance_gap: max_exceedance_gap(&reference_peak, &metamodel_peak),
+        reference_exceedance: exceedance_curve(&reference_peak, &thresholds, 0.95),
+        metamodel_exceedance: exceedance_curve(&metamodel_peak, &thresholds, 0.95),
+        reference_seconds_per_sample: median(results.iter().map(|r| r.reference_seconds).collect()),
+        metamodel_seconds_per_sample: median(results.iter().map(|r| r.metamodel_seconds).collect()),
+        reference_peak,
+        metamodel_peak,
+    })
+}

@@ -1,0 +1,100 @@
+//! `windmeta exceedance`: the exceedance curve of a peak response, sampled from a metamodel.
+
+use super::read_metamodel;
+use super::validate::Counter;
+use crate::analysis::{
+    ExceedanceCurve, Response, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg,
+    metamodel_peaks,
+};
+use crate::error::{Error, Result};
+use crate::uncertainty::parse_assignment;
+use clap::Args;
+use serde_json::json;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Args)]
+pub struct ExceedanceArgs {
+    #[arg(long)]
+    pub model: PathBuf,
+    #[arg(long, default_value_t = 10_000)]
+    pub samples: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Floor of the response (default: the roof).
+    #[arg(long)]
+    pub floor: Option<usize>,
+    /// The inter-storey drift below the floor instead of its displacement.
+    #[arg(long)]
+    pub drift: bool,
+    /// Hold the mean wind speed (m/s): a curve conditional on it.
+    #[arg(long, allow_negative_numbers = true)]
+    pub wind_speed: Option<f64>,
+    /// Hold any input, e.g. --fix damping_ratio=0.02 (repeatable).
+    #[arg(long = "fix", value_name = "NAME=VALUE")]
+    pub fix: Vec<String>,
+    /// Thresholds (m), comma separated; automatic when absent.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub thresholds: Option<Vec<f64>>,
+    /// Confidence level of the band.
+    #[arg(long, default_value_t = 0.95)]
+    pub confidence: f64,
+    /// Write the curve: .csv, .json or .svg by extension.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+fn csv_text(curve: &ExceedanceCurve) -> String {
+    let mut out = String::from("threshold_m,probability,lower,upper\n");
+    for i in 0..curve.thresholds.len() {
+        out += &format!("{},{},{},{}\n", curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]);
+    }
+    out
+}
+
+pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
+    check_confidence(args.confidence)?;
+    let (metamodel, problem) = read_metamodel(&args.model)?;
+    let floor = args.floor.unwrap_or(problem.structure.floors());
+    let response = if args.drift { Response::Drift { floor } } else { Response::Displacement { floor } };
+    let mut inputs = problem.inputs.clone();
+    if let Some(v) = args.wind_speed {
+        inputs = inputs.with_fixed("wind_speed", v)?;
+    }
+    for assignment in &args.fix {
+        let (name, value) = parse_assignment(assignment)?;
+        inputs = inputs.with_fixed(&name, value)?;
+    }
+    if let Some(t) = &args.thresholds
+        && (t.is_empty() || t.iter().any(|x| !x.is_finite()))
+    {
+        return Err(Error::invalid("thresholds", "must be a non-empty list of finite numbers"));
+    }
+    let started = Instant::now();
+    let peaks = metamodel_peaks(&metamodel, &problem, &inputs, args.samples, args.seed, response, &Counter(started))?;
+    let seconds = started.elapsed().as_secs_f64();
+    let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
+    let curve = exceedance_curve(&peaks, &thresholds, args.confidence);
+    let what = if args.drift { format!("drift below floor {floor}") } else { format!("displacement of floor {floor}") };
+    if let Some(path) = &args.out {
+        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("");
+        let text = match extension {
+            "csv" => csv_text(&curve),
+            "json" => serde_json::to_string_pretty(&json!({"response": response, "curve": curve, "seconds": seconds}))
+                .expect("plain JSON"),
+            "svg" => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x (m)")),
+            _ => return Err(Error::invalid("out", "the file must end in .csv, .json or .svg")),
+        };
+        std::fs::write(path, text).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
+    }
+    let mut out = format!("peak {what}: {} samples in {seconds:.2} s\n", args.samples);
+    out += &format!("{:>12}  {:>10}  {:>10}  {:>10}\n", "x (m)", "P(peak>x)", "lower", "upper");
+    let step = (thresholds.len() / 12).max(1);
+    for i in (0..thresholds.len()).step_by(step) {
+        out += &format!(
+            "{:>12.5}  {:>10.4}  {:>10.4}  {:>10.4}\n",
+            curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]
+        );
+    }
+    Ok(out)
+}

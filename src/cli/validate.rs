@@ -1,0 +1,84 @@
+//! `windmeta validate`: a metamodel against the reference on fresh samples.
+
+use super::read_metamodel;
+use crate::analysis::{validate as run_validation, validation_svg};
+use crate::error::{Error, Result};
+use crate::surrogate::{Observer, Progress};
+use clap::Args;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Args)]
+pub struct ValidateArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
+    #[arg(long)]
+    pub model: PathBuf,
+    /// Fresh Monte Carlo samples, each one storm through both models.
+    #[arg(long, default_value_t = 200)]
+    pub samples: usize,
+    #[arg(long, default_value_t = 1000)]
+    pub seed: u64,
+    /// Print the whole report as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Also write the JSON report here.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write the figure (peak scatter and exceedance curves) as SVG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+}
+
+pub(super) struct Counter(pub Instant);
+
+impl Observer for Counter {
+    fn progress(&self, progress: Progress) {
+        if let Progress::Samples { done, total } = progress
+            && (done == total || done % (total / 10).max(1) == 0)
+        {
+            eprintln!("[{:>7.1} s] {done}/{total} samples", self.0.elapsed().as_secs_f64());
+        }
+    }
+}
+
+pub fn validate(args: &ValidateArgs) -> Result<String> {
+    let (metamodel, problem) = read_metamodel(&args.model)?;
+    let report = run_validation(&metamodel, &problem, args.samples, args.seed, &Counter(Instant::now()))?;
+    let json = serde_json::to_string_pretty(&report).expect("a report serialises");
+    if let Some(path) = &args.out {
+        std::fs::write(path, &json).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
+    }
+    if let Some(path) = &args.plot {
+        let svg = validation_svg(
+            &report.reference_peak,
+            &report.metamodel_peak,
+            &[("reference", &report.reference_exceedance), ("PC-NARX", &report.metamodel_exceedance)],
+        );
+        std::fs::write(path, svg).map_err(|e| Error::invalid("plot", format!("{}: {e}", path.display())))?;
+    }
+    if args.json {
+        return Ok(json);
+    }
+    let modes: Vec<String> = report.mode_mean_relative_errors.iter().map(|e| format!("{e:.2e}")).collect();
+    Ok(format!(
+        "{} on {} fresh samples (seed {})\n\
+         peak roof displacement: correlation {:.4}, median relative error {:.2} %, 95th percentile {:.2} %\n\
+         mean relative error, full PC-NARX: roof {:.2e}, modes [{}]\n\
+         calibration mean relative error (NARX, mean over modes): {:.2e}\n\
+         largest gap between the exceedance curves: {:.3}\n\
+         per sample: reference {:.1} ms, metamodel {:.2} ms (×{:.0})\n",
+        problem.name,
+        report.samples,
+        report.seed,
+        report.peak_correlation,
+        100.0 * report.median_peak_relative_error,
+        100.0 * report.p95_peak_relative_error,
+        report.mean_relative_error,
+        modes.join(", "),
+        report.calibration_mean_relative_error,
+        report.max_exceedance_gap,
+        1e3 * report.reference_seconds_per_sample,
+        1e3 * report.metamodel_seconds_per_sample,
+        report.reference_seconds_per_sample / report.metamodel_seconds_per_sample,
+    ))
+}
