@@ -33,7 +33,7 @@ impl Response {
         let weight = |floor: usize| -> Vec<f64> { shapes.iter().map(|s| s[floor - 1]).collect() };
         let weights: Vec<f64> = match *self {
             Response::Displacement { floor } => weight(floor),
-            Response::Drift { floor } if floor == 1 => weight(1),
+            Response::Drift { floor: 1 } => weight(1),
             Response::Drift { floor } => weight(floor).iter().zip(weight(floor - 1)).map(|(a, b)| a - b).collect(),
         };
         let steps = modal.first().map_or(0, Vec::len);

@@ -54,6 +54,13 @@ fn csv_text(curve: &ExceedanceCurve) -> String {
 
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     check_confidence(args.confidence)?;
+    let format = match &args.out {
+        None => None,
+        Some(path) => match path.extension().and_then(|e| e.to_str()) {
+            Some(e @ ("csv" | "json" | "svg")) => Some(e.to_string()),
+            _ => return Err(Error::invalid("out", "the file must end in .csv, .json or .svg")),
+        },
+    };
     let (metamodel, problem) = read_metamodel(&args.model)?;
     let floor = args.floor.unwrap_or(problem.structure.floors());
     let response = if args.drift { Response::Drift { floor } } else { Response::Displacement { floor } };
@@ -76,14 +83,12 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
     let curve = exceedance_curve(&peaks, &thresholds, args.confidence);
     let what = if args.drift { format!("drift below floor {floor}") } else { format!("displacement of floor {floor}") };
-    if let Some(path) = &args.out {
-        let extension = path.extension().and_then(|e| e.to_str()).unwrap_or("");
-        let text = match extension {
+    if let (Some(path), Some(format)) = (&args.out, format) {
+        let text = match format.as_str() {
             "csv" => csv_text(&curve),
             "json" => serde_json::to_string_pretty(&json!({"response": response, "curve": curve, "seconds": seconds}))
                 .expect("plain JSON"),
-            "svg" => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x (m)")),
-            _ => return Err(Error::invalid("out", "the file must end in .csv, .json or .svg")),
+            _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x (m)")),
         };
         std::fs::write(path, text).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
     }

@@ -4,7 +4,9 @@
 
 use super::Parametrization;
 use super::identify::{Record, Refinement, least_squares, refine, select_structure, simulate};
-use super::metamodel::{CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeModel, StageSeconds};
+use super::metamodel::{
+    CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeModel, StageSeconds, StaticResponse,
+};
 use super::narx::{NarxOptions, relative_error};
 use super::pce::{PceOptions, SparsePce};
 use crate::dynamics::integrate_reduced;
@@ -120,8 +122,10 @@ pub struct ModeDiagnostics {
     /// NARX only: mean over experiments of the free-run relative error with each experiment's own
     /// refined coefficients.
     pub narx_mean_relative_error: f64,
-    /// Full PC-NARX: the same with the coefficients from their expansions.
+    /// Full PC-NARX: the same with the coefficients and the static level from their expansions.
     pub pc_narx_mean_relative_error: f64,
+    /// Corrected leave-one-out error of the static level's expansion.
+    pub static_level_loo_error: f64,
     /// Corrected leave-one-out error of each coefficient's expansion.
     pub coefficient_loo_errors: Vec<f64>,
     /// Terms kept in each coefficient's expansion.
@@ -201,16 +205,36 @@ pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn
     for mode in 0..problem.modes.count() {
         check_cancel(observer)?;
         observer.progress(Progress::Structure { mode: mode + 1 });
-        let output_scale = pooled_rms(experiments.iter().map(|e| &e.y[mode]));
-        let input_scale = pooled_rms(experiments.iter().map(|e| &e.q[mode]));
-        let records: Vec<Record> = experiments
+        // The NARX works on deviations from the static state at rest under the mean load: y′ = y − y(0),
+        // Q′ = Q − Q̄. Polynomial terms then act on the fluctuation, and the static level (a smooth
+        // function of the inputs) gets its own expansion instead of hiding in a constant.
+        let deviations: Vec<(Vec<f64>, Vec<f64>)> = experiments
             .iter()
-            .map(|e| Record {
-                y: e.y[mode].iter().map(|v| v / output_scale).collect(),
-                q: e.q[mode].iter().map(|v| v / input_scale).collect(),
-                q_rest: e.q_mean[mode] / input_scale,
+            .map(|e| {
+                let y0 = e.y[mode][0];
+                (e.y[mode].iter().map(|v| v - y0).collect(), e.q[mode].iter().map(|v| v - e.q_mean[mode]).collect())
             })
             .collect();
+        let output_scale = pooled_rms(deviations.iter().map(|d| &d.0));
+        let input_scale = pooled_rms(deviations.iter().map(|d| &d.1));
+        let records: Vec<Record> = deviations
+            .iter()
+            .map(|(y, q)| Record {
+                y: y.iter().map(|v| v / output_scale).collect(),
+                q: q.iter().map(|v| v / input_scale).collect(),
+                q_rest: 0.0,
+            })
+            .collect();
+        let largest_load = experiments.iter().map(|e| e.q_mean[mode].abs()).fold(0.0, f64::max);
+        let per_unit_mean_load = experiments.iter().all(|e| e.q_mean[mode].abs() > 1e-6 * largest_load);
+        let static_targets: Vec<f64> = experiments
+            .iter()
+            .map(|e| if per_unit_mean_load { e.y[mode][0] / e.q_mean[mode] } else { e.y[mode][0] })
+            .collect();
+        let static_response = StaticResponse {
+            per_unit_mean_load,
+            expansion: SparsePce::fit(&problem.inputs, &xi, &static_targets, &options.pce)?,
+        };
         let stage = Instant::now();
         let chosen: Vec<Record> = selection.iter().map(|&i| records[i].clone()).collect();
         let structure = select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms)?;
@@ -255,10 +279,15 @@ pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn
         let pc_errors: Vec<f64> = records
             .par_iter()
             .zip(&xi)
-            .map(|(record, xi)| {
+            .zip(&experiments)
+            .map(|((record, xi), experiment)| {
                 let phi: Vec<f64> = expansions.iter().map(|pce| pce.evaluate(xi)).collect();
                 let theta = parametrization.inverse(&terms, &phi);
-                simulate(&terms, &theta, record).map_or(f64::INFINITY, |y_hat| relative_error(&record.y, &y_hat))
+                let level = static_response.evaluate(xi, experiment.q_mean[mode]);
+                simulate(&terms, &theta, record).map_or(f64::INFINITY, |y_hat| {
+                    let full: Vec<f64> = y_hat.iter().map(|v| level + v * output_scale).collect();
+                    relative_error(&experiment.y[mode], &full)
+                })
             })
             .collect();
         let narx_errors: Vec<f64> = fitted.iter().map(|(_, e)| *e).collect();
@@ -271,6 +300,7 @@ pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn
             structure_error: structure.error,
             narx_mean_relative_error: mean(&narx_errors),
             pc_narx_mean_relative_error: mean(&pc_errors),
+            static_level_loo_error: static_response.expansion.loo_error,
             coefficient_loo_errors: expansions.iter().map(|p| p.loo_error).collect(),
             coefficient_pce_terms: expansions.iter().map(|p| p.terms.len()).collect(),
             diverged_experiments: diverged,
@@ -280,6 +310,7 @@ pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn
             terms,
             output_scale,
             input_scale,
+            static_response,
             parametrization,
             coefficients: expansions,
         });

@@ -248,13 +248,13 @@ fn sensitivities(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Option<(
             row[k] += g;
             if term.output_power > 0 {
                 let dg = c * term.output_derivative(y_lag, q_lag);
-                let source = if term.output_lag > t { 0 } else { t - term.output_lag };
+                let source = t.saturating_sub(term.output_lag);
                 for i in 0..p {
                     row[i] += dg * s[source * p + i];
                 }
             }
         }
-        if !(value.abs() <= super::narx::DIVERGENCE_BOUND) {
+        if super::narx::diverged(value) {
             return None;
         }
         y_hat[t] = value;

@@ -20,13 +20,33 @@ pub struct ModeModel {
     pub terms: Vec<NarxTerm>,
     /// The terms written out, e.g. `y(t-1)` (for people; `terms` is authoritative).
     pub term_names: Vec<String>,
-    /// The NARX works on y / output_scale and Q / input_scale (m and N).
+    /// The NARX works on deviations from the static state, (y − y_static) / output_scale and
+    /// (Q − Q̄) / input_scale (m and N), at rest at 0 before the storm.
     pub output_scale: f64,
     pub input_scale: f64,
+    /// The static modal displacement under the mean wind load.
+    pub static_response: StaticResponse,
     /// What the expansions are of (see [`Parametrization`]).
     pub parametrization: Parametrization,
     /// Polynomial chaos expansion of each expanded coefficient over the standard-space inputs.
     pub coefficients: Vec<SparsePce>,
+}
+
+/// How the static modal displacement of a sample is predicted.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct StaticResponse {
+    /// When true the expansion is of the static gain y_static / Q̄ (m/N), multiplied by the
+    /// sample's own mean modal force, which carries the wind speed exactly; when false (some
+    /// experiment had Q̄ ≈ 0) it is of y_static itself (m).
+    pub per_unit_mean_load: bool,
+    pub expansion: SparsePce,
+}
+
+impl StaticResponse {
+    pub fn evaluate(&self, xi: &[f64], mean_load: f64) -> f64 {
+        let value = self.expansion.evaluate(xi);
+        if self.per_unit_mean_load { value * mean_load } else { value }
+    }
 }
 
 /// Roof-normalised modes the metamodel was calibrated on (shapes fixed across samples).
@@ -114,18 +134,16 @@ impl Metamodel {
     pub fn predict(&self, problem: &Problem, x: &[f64], forces: &ModalForces) -> Result<Vec<Vec<f64>>> {
         problem.inputs.check_sample(x)?;
         let theta = self.coefficients(problem, x);
+        let xi = problem.inputs.to_standard(x);
         let mut out = Vec::with_capacity(self.models.len());
         for (m, (model, theta)) in self.models.iter().zip(&theta).enumerate() {
-            let q: Vec<f64> = forces.series[m].iter().map(|v| v / model.input_scale).collect();
-            let q_rest = forces.mean[m] / model.input_scale;
-            let guess = forces.mean[m]
-                / (self.modes.modal_masses_kg[m] * self.modes.frequencies_rad_s[m].powi(2))
-                / model.output_scale;
-            let rest = rest_output(&model.terms, theta, q_rest, guess)?;
+            let q: Vec<f64> = forces.series[m].iter().map(|v| (v - forces.mean[m]) / model.input_scale).collect();
+            let rest = rest_output(&model.terms, theta, 0.0, 0.0)?;
             let mut y = vec![0.0; q.len()];
-            free_run(&model.terms, theta, &q, (rest, q_rest), &mut y)
+            free_run(&model.terms, theta, &q, (rest, 0.0), &mut y)
                 .map_err(|e| Error::Numerical(format!("mode {}: {e}", m + 1)))?;
-            y.iter_mut().for_each(|v| *v *= model.output_scale);
+            let level = model.static_response.evaluate(&xi, forces.mean[m]);
+            y.iter_mut().for_each(|v| *v = level + *v * model.output_scale);
             out.push(y);
         }
         Ok(out)

@@ -11,5 +11,5 @@ pub mod pce;
 
 pub use calibrate::{CalibrationOptions, MAX_EXPERIMENTS, ModeDiagnostics, Observer, Progress, Silent, calibrate};
 pub use identify::Refinement;
-pub use metamodel::{CalibrationSummary, Metamodel, ModalBasis, ModeModel, StageSeconds};
+pub use metamodel::{CalibrationSummary, Metamodel, ModalBasis, ModeModel, StageSeconds, StaticResponse};
 pub use parametrization::Parametrization;

@@ -204,6 +204,12 @@ pub fn rest_output(terms: &[NarxTerm], theta: &[f64], q_rest: f64, guess: f64) -
 /// Output magnitude (scaled units) beyond which a free run counts as diverged: the data are O(1).
 pub const DIVERGENCE_BOUND: f64 = 1.0e3;
 
+/// Whether a simulated output has left the range a sane model can produce.
+#[inline]
+pub fn diverged(value: f64) -> bool {
+    !value.is_finite() || value.abs() > DIVERGENCE_BOUND
+}
+
 /// Free run (Eq. 10): ŷ(t) = Σ θ_i g_i(ẑ(t)) from the rest state, the outputs fed back. Writes
 /// `out[0..q.len()]`; fails when the run leaves [−bound, bound] or stops being finite.
 pub fn free_run(terms: &[NarxTerm], theta: &[f64], q: &[f64], rest: (f64, f64), out: &mut [f64]) -> Result<()> {
@@ -214,7 +220,7 @@ pub fn free_run(terms: &[NarxTerm], theta: &[f64], q: &[f64], rest: (f64, f64), 
         for (term, c) in terms.iter().zip(theta) {
             value += c * term.value(lagged(out, t, term.output_lag, rest.0), lagged(q, t, term.input_lag, rest.1));
         }
-        if !(value.abs() <= DIVERGENCE_BOUND) {
+        if diverged(value) {
             return Err(Error::Numerical(format!("the free run diverged at step {t}")));
         }
         out[t] = value;

@@ -4,12 +4,12 @@
 //! At 100 Hz a lightly damped mode has autoregressive coefficients a₁ ≈ 2, a₂ ≈ −1 whose sum is
 //! pinned down by the data to 10⁻⁸ while each alone scatters from storm to storm by 10⁻⁵ along a
 //! valley of equal simulation error. Expanded separately, with different sparse bases, their sum —
-//! and with it the static gain b/(1 − a₁ − a₂) — loses the digits that matter. Linear input terms at
-//! several lags are nearly collinear at 100 Hz in the same way. So the expansions are of
+//! and with it the static gain b/(1 − a₁ − a₂) — loses the digits that matter. Terms of one kind at
+//! neighbouring lags are nearly collinear at 100 Hz in the same way. So the expansions are of
 //! s = 1 − Σ a_j (in place of the first autoregressive coefficient), the other autoregressive
 //! coefficients as they are, every other coefficient divided by s (gains, which the data fix well),
-//! and for the linear input terms the total gain Σ b_i / s in place of the first. The map is
-//! exactly invertible.
+//! and for every group of terms of one kind at several lags (Q(t), Q(t−2); y(t−1)², y(t−2)²) the
+//! group's total gain in place of its first member. The map is exactly invertible.
 
 use super::narx::NarxTerm;
 use serde::{Deserialize, Serialize};
@@ -35,11 +35,26 @@ fn linear_outputs(terms: &[NarxTerm]) -> Vec<usize> {
     idx
 }
 
-fn linear_inputs(terms: &[NarxTerm]) -> Vec<usize> {
-    let mut idx: Vec<usize> =
-        (0..terms.len()).filter(|&i| terms[i].input_power == 1 && terms[i].output_power == 0).collect();
-    idx.sort_by_key(|&i| terms[i].input_lag);
-    idx
+/// Groups of two or more terms of the same kind (the same powers) at different lags, other than the
+/// autoregressive ones, each sorted by lag: nearly collinear at 100 Hz, so each group's sum is what
+/// the data fix.
+fn lag_groups(terms: &[NarxTerm]) -> Vec<Vec<usize>> {
+    let mut groups: Vec<Vec<usize>> = Vec::new();
+    for (i, t) in terms.iter().enumerate() {
+        if t.is_constant() || (t.output_power == 1 && t.input_power == 0) {
+            continue;
+        }
+        let kind = (t.output_power, t.input_power);
+        match groups.iter_mut().find(|g| (terms[g[0]].output_power, terms[g[0]].input_power) == kind) {
+            Some(g) => g.push(i),
+            None => groups.push(vec![i]),
+        }
+    }
+    groups.retain(|g| g.len() > 1);
+    for g in &mut groups {
+        g.sort_by_key(|&i| (terms[i].output_lag, terms[i].input_lag));
+    }
+    groups
 }
 
 impl Parametrization {
@@ -64,7 +79,7 @@ impl Parametrization {
             return theta.to_vec();
         }
         let s = 1.0 - linear.iter().map(|&i| theta[i]).sum::<f64>();
-        let inputs = linear_inputs(terms);
+        let groups = lag_groups(terms);
         let mut phi: Vec<f64> = (0..theta.len())
             .map(|i| {
                 if i == linear[0] {
@@ -76,8 +91,8 @@ impl Parametrization {
                 }
             })
             .collect();
-        if let Some(&first) = inputs.first() {
-            phi[first] = inputs.iter().map(|&i| theta[i]).sum::<f64>() / s;
+        for group in &groups {
+            phi[group[0]] = group.iter().map(|&i| theta[i]).sum::<f64>() / s;
         }
         if self == Parametrization::StableGains {
             phi[linear[0]] = s.ln();
@@ -105,7 +120,7 @@ impl Parametrization {
         }
         let s = phi[linear[0]];
         let others: f64 = linear[1..].iter().map(|&i| phi[i]).sum();
-        let inputs = linear_inputs(terms);
+        let groups = lag_groups(terms);
         let mut theta: Vec<f64> = (0..phi.len())
             .map(|i| {
                 if i == linear[0] {
@@ -117,8 +132,8 @@ impl Parametrization {
                 }
             })
             .collect();
-        if let Some(&first) = inputs.first() {
-            theta[first] = s * (phi[first] - inputs[1..].iter().map(|&i| phi[i]).sum::<f64>());
+        for group in &groups {
+            theta[group[0]] = s * (phi[group[0]] - group[1..].iter().map(|&i| phi[i]).sum::<f64>());
         }
         theta
     }

@@ -374,16 +374,16 @@ mod tests {
                 let x = lo + (s as f64 + 0.5) * h;
                 univariate(family, x, 5, &mut a);
                 let w = density(x) * h;
-                for i in 0..6 {
-                    for j in 0..6 {
-                        gram[i][j] += a[i] * a[j] * w;
+                for (row, ai) in gram.iter_mut().zip(&a) {
+                    for (g, aj) in row.iter_mut().zip(&a) {
+                        *g += ai * aj * w;
                     }
                 }
             }
-            for i in 0..6 {
-                for j in 0..6 {
+            for (i, row) in gram.iter().enumerate() {
+                for (j, g) in row.iter().enumerate() {
                     let expected = if i == j { 1.0 } else { 0.0 };
-                    assert!((gram[i][j] - expected).abs() < 1e-6, "{family:?} ({i},{j}): {}", gram[i][j]);
+                    assert!((g - expected).abs() < 1e-6, "{family:?} ({i},{j}): {g}");
                 }
             }
         }
