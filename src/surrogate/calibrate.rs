@@ -15,6 +15,7 @@ use crate::problem::{Problem, WindPath};
 use crate::uncertainty::{latin_hypercube, rng_from_seed, stream_seed};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::sync::Arc;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -194,7 +195,26 @@ pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn
     let experiments = run_experiments(problem, &design, options, observer)?;
     let mut seconds = StageSeconds { experiments: started.elapsed().as_secs_f64(), ..Default::default() };
     let xi: Vec<Vec<f64>> = design.iter().map(|x| problem.inputs.to_standard(x)).collect();
-    let dictionary = options.narx.dictionary();
+    let modes = problem.modes.count();
+    // The NARX works on deviations from the static state at rest under the mean load: y′ = y − y(0),
+    // Q′ = Q − Q̄. Polynomial terms then act on the fluctuation, and the static level (a smooth
+    // function of the inputs) gets its own expansion instead of hiding in a constant. Every mode's
+    // scaled deviations are shared by all modes' records (the coupling terms read them).
+    let deviation = |series: &[f64], rest: f64| -> Vec<f64> { series.iter().map(|v| v - rest).collect() };
+    let scales: Vec<(f64, f64)> = (0..modes)
+        .map(|m| {
+            let y: Vec<Vec<f64>> = experiments.iter().map(|e| deviation(&e.y[m], e.y[m][0])).collect();
+            let q: Vec<Vec<f64>> = experiments.iter().map(|e| deviation(&e.q[m], e.q_mean[m])).collect();
+            (pooled_rms(y.iter()), pooled_rms(q.iter()))
+        })
+        .collect();
+    let scaled =
+        |series: &[f64], rest: f64, scale: f64| -> Arc<[f64]> { series.iter().map(|v| (v - rest) / scale).collect() };
+    let outputs: Vec<Vec<Arc<[f64]>>> =
+        experiments.iter().map(|e| (0..modes).map(|m| scaled(&e.y[m], e.y[m][0], scales[m].0)).collect()).collect();
+    let inputs: Vec<Vec<Arc<[f64]>>> =
+        experiments.iter().map(|e| (0..modes).map(|m| scaled(&e.q[m], e.q_mean[m], scales[m].1)).collect()).collect();
+    let coupled = options.narx.coupling_lags > 0 && modes > 1;
     let k = experiments.len();
     let stride = (k as f64 / options.selection_experiments.min(k) as f64).max(1.0);
     let selection: Vec<usize> =
@@ -202,29 +222,19 @@ pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn
 
     let mut models = Vec::new();
     let mut diagnostics = Vec::new();
-    for mode in 0..problem.modes.count() {
+    for mode in 0..modes {
         check_cancel(observer)?;
         observer.progress(Progress::Structure { mode: mode + 1 });
-        // The NARX works on deviations from the static state at rest under the mean load: y′ = y − y(0),
-        // Q′ = Q − Q̄. Polynomial terms then act on the fluctuation, and the static level (a smooth
-        // function of the inputs) gets its own expansion instead of hiding in a constant.
-        let deviations: Vec<(Vec<f64>, Vec<f64>)> = experiments
-            .iter()
-            .map(|e| {
-                let y0 = e.y[mode][0];
-                (e.y[mode].iter().map(|v| v - y0).collect(), e.q[mode].iter().map(|v| v - e.q_mean[mode]).collect())
-            })
-            .collect();
-        let output_scale = pooled_rms(deviations.iter().map(|d| &d.0));
-        let input_scale = pooled_rms(deviations.iter().map(|d| &d.1));
-        let records: Vec<Record> = deviations
-            .iter()
-            .map(|(y, q)| Record {
-                y: y.iter().map(|v| v / output_scale).collect(),
-                q: q.iter().map(|v| v / input_scale).collect(),
+        let (output_scale, input_scale) = scales[mode];
+        let records: Vec<Record> = (0..k)
+            .map(|e| Record {
+                y: outputs[e][mode].clone(),
+                q: inputs[e][mode].clone(),
                 q_rest: 0.0,
+                outputs: if coupled { outputs[e].clone() } else { Vec::new() },
             })
             .collect();
+        let dictionary = options.narx.dictionary(mode, modes);
         let largest_load = experiments.iter().map(|e| e.q_mean[mode].abs()).fold(0.0, f64::max);
         let per_unit_mean_load = experiments.iter().all(|e| e.q_mean[mode].abs() > 1e-6 * largest_load);
         let static_targets: Vec<f64> = experiments

@@ -2,27 +2,45 @@
 //! on a structure, and the refinement of the coefficients on the simulation error (Eq. 11).
 
 use super::lars::lars_path;
-use super::narx::{NarxTerm, free_run, regressors, relative_error, rest_output};
+use super::narx::{Exogenous, NarxTerm, free_run, regressors, relative_error, rest_output};
 use crate::error::{Error, Result};
 use crate::linalg::{cholesky, cholesky_solve};
 use faer::Mat;
 use faer::prelude::SolveLstsq;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeSet;
+use std::sync::Arc;
 
-/// One experiment of one mode, scaled: output, input and the input's mean (the rest load).
+/// One experiment of one mode, scaled: output, input and the input's mean (the rest load), and for
+/// coupling terms every mode's output (shared, not copied).
 #[derive(Debug, Clone)]
 pub struct Record {
-    pub y: Vec<f64>,
-    pub q: Vec<f64>,
+    pub y: Arc<[f64]>,
+    pub q: Arc<[f64]>,
     pub q_rest: f64,
+    /// Every retained mode's output by mode index (the own one included); empty without coupling.
+    pub outputs: Vec<Arc<[f64]>>,
 }
 
 impl Record {
-    /// The measured history before t = 0: the reference starts at rest at y(0).
-    fn measured_rest(&self) -> (f64, f64) {
-        (self.y[0], self.q_rest)
+    /// A record of a mode on its own.
+    pub fn single(y: Vec<f64>, q: Vec<f64>, q_rest: f64) -> Record {
+        Record { y: y.into(), q: q.into(), q_rest, outputs: Vec::new() }
     }
+
+    /// The measured rests of the other modes: the reference starts at rest.
+    fn output_rests(&self) -> Vec<f64> {
+        self.outputs.iter().map(|o| o[0]).collect()
+    }
+
+    fn output_slices(&self) -> Vec<&[f64]> {
+        self.outputs.iter().map(|o| &o[..]).collect()
+    }
+}
+
+/// Borrows a record's series as the exogenous part of a model.
+macro_rules! exogenous {
+    ($record:expr, $slices:ident, $rests:ident) => {{ Exogenous { q: &$record.q, q_rest: $record.q_rest, outputs: &$slices, output_rests: &$rests } }};
 }
 
 /// Gram matrix and correlations of the one-step-ahead regression y(t) ~ g(z(t)) over t ≥ 1 for the
@@ -30,11 +48,12 @@ impl Record {
 pub fn one_step_gram(terms: &[NarxTerm], record: &Record) -> (Vec<f64>, Vec<f64>) {
     let p = terms.len();
     let n = record.y.len();
-    let rest = record.measured_rest();
+    let (slices, rests) = (record.output_slices(), record.output_rests());
+    let ex = exogenous!(record, slices, rests);
     let mut row = vec![0.0; p];
     let (mut sum, mut cross, mut sum_y, mut xy, mut count) = (vec![0.0; p], vec![0.0; p * p], 0.0, vec![0.0; p], 0.0);
     for t in 1..n {
-        regressors(terms, &record.y, &record.q, t, rest, &mut row);
+        regressors(terms, &record.y, record.y[0], &ex, t, &mut row);
         let y = record.y[t];
         for i in 0..p {
             sum[i] += row[i];
@@ -69,11 +88,12 @@ pub fn least_squares(terms: &[NarxTerm], record: &Record) -> Result<Vec<f64>> {
     if n <= p + 1 {
         return Err(Error::invalid("duration_s", "the storm is too short for the NARX model"));
     }
-    let rest = record.measured_rest();
+    let (slices, rests) = (record.output_slices(), record.output_rests());
+    let ex = exogenous!(record, slices, rests);
     let mut x = Mat::<f64>::zeros(n - 1, p);
     let mut row = vec![0.0; p];
     for t in 1..n {
-        regressors(terms, &record.y, &record.q, t, rest, &mut row);
+        regressors(terms, &record.y, record.y[0], &ex, t, &mut row);
         for (j, v) in row.iter().enumerate() {
             x[(t - 1, j)] = *v;
         }
@@ -90,9 +110,10 @@ pub fn least_squares(terms: &[NarxTerm], record: &Record) -> Result<Vec<f64>> {
 
 /// Free run of a model on a record from the model's own rest state; its output series.
 pub fn simulate(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Result<Vec<f64>> {
-    let rest = rest_output(terms, theta, record.q_rest, record.y[0])?;
+    let (slices, rests) = (record.output_slices(), record.output_rests());
+    let rest = rest_output(terms, theta, record.q_rest, &rests, record.y[0])?;
     let mut out = vec![0.0; record.q.len()];
-    free_run(terms, theta, &record.q, (rest, record.q_rest), &mut out)?;
+    free_run(terms, theta, &exogenous!(record, slices, rests), rest, &mut out)?;
     Ok(out)
 }
 
@@ -215,11 +236,18 @@ fn sensitivities(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Option<(
     let p = terms.len();
     let n = record.y.len();
     let q_rest = record.q_rest;
-    let rest = rest_output(terms, theta, q_rest, record.y[0]).ok()?;
+    let (slices, rests) = (record.output_slices(), record.output_rests());
+    let rest = rest_output(terms, theta, q_rest, &rests, record.y[0]).ok()?;
     let mut y_hat = vec![0.0; n];
     let mut s = vec![0.0; n * p];
-    let slope: f64 = terms.iter().zip(theta).map(|(t, c)| c * t.output_derivative(rest, q_rest)).sum();
-    let rest_sensitivity: Vec<f64> = terms.iter().map(|t| t.value(rest, q_rest) / (1.0 - slope)).collect();
+    let rest_output_of = |term: &NarxTerm| term.output_mode.map_or(rest, |j| rests[j]);
+    let slope: f64 = terms
+        .iter()
+        .zip(theta)
+        .filter(|(t, _)| t.reads_own_output())
+        .map(|(t, c)| c * t.output_derivative(rest, q_rest))
+        .sum();
+    let rest_sensitivity: Vec<f64> = terms.iter().map(|t| t.value(rest_output_of(t), q_rest) / (1.0 - slope)).collect();
     y_hat[0] = rest;
     s[..p].copy_from_slice(&rest_sensitivity);
     let mut jtj = vec![0.0; p * p];
@@ -241,12 +269,17 @@ fn sensitivities(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Option<(
         let mut value = 0.0;
         let mut row = vec![0.0; p];
         for (k, (term, c)) in terms.iter().zip(theta).enumerate() {
-            let y_lag = if term.output_lag > t { rest } else { y_hat[t - term.output_lag] };
+            let y_lag = match term.output_mode {
+                None if term.output_lag > t => rest,
+                None => y_hat[t - term.output_lag],
+                Some(j) if term.output_lag > t => rests[j],
+                Some(j) => slices[j][t - term.output_lag],
+            };
             let q_lag = if term.input_lag > t { q_rest } else { record.q[t - term.input_lag] };
             let g = term.value(y_lag, q_lag);
             value += c * g;
             row[k] += g;
-            if term.output_power > 0 {
+            if term.reads_own_output() {
                 let dg = c * term.output_derivative(y_lag, q_lag);
                 let source = t.saturating_sub(term.output_lag);
                 for i in 0..p {
@@ -381,12 +414,8 @@ mod tests {
     use rand::RngExt;
 
     fn arx() -> (Vec<NarxTerm>, Vec<f64>) {
-        let terms = vec![
-            NarxTerm::CONSTANT,
-            NarxTerm { output_lag: 0, output_power: 0, input_lag: 0, input_power: 1 },
-            NarxTerm { output_lag: 1, output_power: 1, input_lag: 0, input_power: 0 },
-            NarxTerm { output_lag: 2, output_power: 1, input_lag: 0, input_power: 0 },
-        ];
+        let terms =
+            vec![NarxTerm::CONSTANT, NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(2, 1, None)];
         (terms, vec![0.002, 0.05, 1.6, -0.7])
     }
 
@@ -399,9 +428,9 @@ mod tests {
             state = 0.95 * state + rng.random::<f64>() - 0.5;
             *v = 1.0 + state;
         }
-        let r = Record { y: vec![0.0; 4000], q, q_rest: 1.0 };
+        let r = Record::single(vec![0.0; 4000], q, 1.0);
         let y = simulate(terms, theta, &r).unwrap();
-        Record { y, ..r }
+        Record { y: y.into(), ..r }
     }
 
     /// Structure selection over the paper's 10-term dictionary finds the true ARX terms, and least
@@ -410,7 +439,7 @@ mod tests {
     fn identification_recovers_a_known_arx_model() {
         let (terms, theta) = arx();
         let records: Vec<Record> = (1..=3).map(|seed| record(&theta, &terms, seed)).collect();
-        let choice = select_structure(&NarxOptions::default().dictionary(), &records, &records, 8).unwrap();
+        let choice = select_structure(&NarxOptions::default().dictionary(0, 1), &records, &records, 8).unwrap();
         let mut truth = terms.clone();
         truth.sort();
         assert_eq!(choice.terms, truth);

@@ -2,7 +2,7 @@
 //! versioned.
 
 use super::Parametrization;
-use super::narx::{NarxTerm, free_run, rest_output};
+use super::narx::{NarxTerm, joint_free_run};
 use super::pce::SparsePce;
 use super::{CalibrationOptions, ModeDiagnostics};
 use crate::error::{Error, Result};
@@ -135,16 +135,18 @@ impl Metamodel {
         problem.inputs.check_sample(x)?;
         let theta = self.coefficients(problem, x);
         let xi = problem.inputs.to_standard(x);
-        let mut out = Vec::with_capacity(self.models.len());
-        for (m, (model, theta)) in self.models.iter().zip(&theta).enumerate() {
-            let q: Vec<f64> = forces.series[m].iter().map(|v| (v - forces.mean[m]) / model.input_scale).collect();
-            let rest = rest_output(&model.terms, theta, 0.0, 0.0)?;
-            let mut y = vec![0.0; q.len()];
-            free_run(&model.terms, theta, &q, (rest, 0.0), &mut y)
-                .map_err(|e| Error::Numerical(format!("mode {}: {e}", m + 1)))?;
+        let inputs: Vec<Vec<f64>> = self
+            .models
+            .iter()
+            .enumerate()
+            .map(|(m, model)| forces.series[m].iter().map(|v| (v - forces.mean[m]) / model.input_scale).collect())
+            .collect();
+        let models: Vec<(&[NarxTerm], &[f64])> =
+            self.models.iter().zip(&theta).map(|(model, t)| (&model.terms[..], &t[..])).collect();
+        let mut out = joint_free_run(&models, &inputs)?;
+        for (m, (model, y)) in self.models.iter().zip(out.iter_mut()).enumerate() {
             let level = model.static_response.evaluate(&xi, forces.mean[m]);
             y.iter_mut().for_each(|v| *v = level + *v * model.output_scale);
-            out.push(y);
         }
         Ok(out)
     }

@@ -10,17 +10,37 @@ use serde::{Deserialize, Serialize};
 use std::fmt;
 
 /// One candidate term y(t − output_lag)^output_power · Q(t − input_lag)^input_power (Eq. 18); all
-/// powers zero is the constant.
+/// powers zero is the constant. With `output_mode` set, the output factor is another mode's
+/// displacement: the dampers couple the modes, which a single-input model cannot see.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct NarxTerm {
     pub output_lag: usize,
     pub output_power: u32,
     pub input_lag: usize,
     pub input_power: u32,
+    /// Another mode (0-based) whose output the term reads; `None` is the mode's own.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_mode: Option<usize>,
 }
 
 impl NarxTerm {
-    pub const CONSTANT: NarxTerm = NarxTerm { output_lag: 0, output_power: 0, input_lag: 0, input_power: 0 };
+    pub const CONSTANT: NarxTerm =
+        NarxTerm { output_lag: 0, output_power: 0, input_lag: 0, input_power: 0, output_mode: None };
+
+    /// y(t − lag) of the mode itself or of another one.
+    pub fn output(output_lag: usize, output_power: u32, output_mode: Option<usize>) -> NarxTerm {
+        NarxTerm { output_lag, output_power, input_lag: 0, input_power: 0, output_mode }
+    }
+
+    /// Q(t − lag)^power.
+    pub fn input(input_lag: usize, input_power: u32) -> NarxTerm {
+        NarxTerm { output_lag: 0, output_power: 0, input_lag, input_power, output_mode: None }
+    }
+
+    /// Whether the output factor is this mode's own (feedback) rather than another's.
+    pub fn reads_own_output(&self) -> bool {
+        self.output_power > 0 && self.output_mode.is_none()
+    }
 
     pub fn is_constant(&self) -> bool {
         self.output_power == 0 && self.input_power == 0
@@ -61,7 +81,8 @@ impl fmt::Display for NarxTerm {
         let mut parts = Vec::new();
         let exponent = |p: u32| if p > 1 { format!("^{p}") } else { String::new() };
         if self.output_power > 0 {
-            parts.push(format!("y(t-{}){}", self.output_lag, exponent(self.output_power)));
+            let name = self.output_mode.map_or("y".to_string(), |j| format!("y{}", j + 1));
+            parts.push(format!("{name}(t-{}){}", self.output_lag, exponent(self.output_power)));
         }
         if self.input_power > 0 {
             let lag = if self.input_lag == 0 { "Q(t)".to_string() } else { format!("Q(t-{})", self.input_lag) };
@@ -88,6 +109,9 @@ pub struct NarxOptions {
     pub cross_terms: bool,
     /// Most terms in a selected model (the constant included).
     pub max_terms: usize,
+    /// Lags 1 ..= coupling_lags of every other retained mode's displacement as candidates (0: each
+    /// mode on its own, as in the paper).
+    pub coupling_lags: usize,
 }
 
 impl Default for NarxOptions {
@@ -98,7 +122,8 @@ impl Default for NarxOptions {
             input_lags: 2,
             max_input_power: 1,
             cross_terms: false,
-            max_terms: 8,
+            max_terms: 10,
+            coupling_lags: 2,
         }
     }
 }
@@ -123,20 +148,27 @@ impl NarxOptions {
         if self.max_terms < 2 {
             return Err(Error::invalid("narx.max_terms", "must be at least 2"));
         }
+        if self.coupling_lags > 10 {
+            return Err(Error::invalid(
+                "narx.coupling_lags",
+                format!("must be at most 10, got {}", self.coupling_lags),
+            ));
+        }
         Ok(())
     }
 
-    /// The candidate terms: constant, input powers, output powers, then cross products.
-    pub fn dictionary(&self) -> Vec<NarxTerm> {
+    /// The candidate terms of mode `mode` of `modes`: constant, input powers, output powers, cross
+    /// products, then the other modes' displacements.
+    pub fn dictionary(&self, mode: usize, modes: usize) -> Vec<NarxTerm> {
         let mut terms = vec![NarxTerm::CONSTANT];
         for input_power in 1..=self.max_input_power {
             for input_lag in 0..=self.input_lags {
-                terms.push(NarxTerm { output_lag: 0, output_power: 0, input_lag, input_power });
+                terms.push(NarxTerm::input(input_lag, input_power));
             }
         }
         for output_lag in 1..=self.output_lags {
             for output_power in 1..=self.max_degree {
-                terms.push(NarxTerm { output_lag, output_power, input_lag: 0, input_power: 0 });
+                terms.push(NarxTerm::output(output_lag, output_power, None));
             }
         }
         if self.cross_terms {
@@ -144,10 +176,21 @@ impl NarxOptions {
                 for output_power in 1..self.max_degree {
                     for input_power in 1..=self.max_input_power.min(self.max_degree - output_power) {
                         for input_lag in 0..=self.input_lags {
-                            terms.push(NarxTerm { output_lag, output_power, input_lag, input_power });
+                            terms.push(NarxTerm {
+                                output_lag,
+                                output_power,
+                                input_lag,
+                                input_power,
+                                output_mode: None,
+                            });
                         }
                     }
                 }
+            }
+        }
+        for other in (0..modes).filter(|&j| j != mode) {
+            for lag in 1..=self.coupling_lags {
+                terms.push(NarxTerm::output(lag, 1, Some(other)));
             }
         }
         terms
@@ -165,24 +208,50 @@ fn lagged(series: &[f64], t: usize, lag: usize, rest: f64) -> f64 {
     if lag > t { rest } else { series[t - lag] }
 }
 
-/// Value of every term at step t given output and input series (scaled) and their rest values.
-pub fn regressors(terms: &[NarxTerm], y: &[f64], q: &[f64], t: usize, rest: (f64, f64), out: &mut [f64]) {
+/// The series a model reads besides its own output: its input and the other modes' outputs, each
+/// with its value at rest before t = 0.
+#[derive(Debug, Clone, Copy)]
+pub struct Exogenous<'a> {
+    pub q: &'a [f64],
+    pub q_rest: f64,
+    /// Every mode's output series by mode index (the own entry is not read); empty without coupling.
+    pub outputs: &'a [&'a [f64]],
+    /// Their rest values.
+    pub output_rests: &'a [f64],
+}
+
+impl Exogenous<'_> {
+    #[inline]
+    fn value(&self, term: &NarxTerm, own: &[f64], own_rest: f64, t: usize) -> f64 {
+        let y = match term.output_mode {
+            None => lagged(own, t, term.output_lag, own_rest),
+            Some(j) => lagged(self.outputs[j], t, term.output_lag, self.output_rests[j]),
+        };
+        term.value(y, lagged(self.q, t, term.input_lag, self.q_rest))
+    }
+}
+
+/// Value of every term at step t given the own output series (measured or simulated) and the rest.
+pub fn regressors(terms: &[NarxTerm], own: &[f64], own_rest: f64, ex: &Exogenous, t: usize, out: &mut [f64]) {
     for (o, term) in out.iter_mut().zip(terms) {
-        *o = term.value(lagged(y, t, term.output_lag, rest.0), lagged(q, t, term.input_lag, rest.1));
+        *o = ex.value(term, own, own_rest, t);
     }
 }
 
 /// The model's rest output under a constant input q̄: the fixed point y = Σ θ_i g_i(y, …, y; q̄),
 /// by Newton's method from `guess`.
-pub fn rest_output(terms: &[NarxTerm], theta: &[f64], q_rest: f64, guess: f64) -> Result<f64> {
+pub fn rest_output(terms: &[NarxTerm], theta: &[f64], q_rest: f64, output_rests: &[f64], guess: f64) -> Result<f64> {
     let mut y = guess;
     for _ in 0..100 {
         let (mut g, mut dg, mut magnitude) = (0.0, 0.0, 0.0);
         for (term, c) in terms.iter().zip(theta) {
-            let v = c * term.value(y, q_rest);
+            let output = term.output_mode.map_or(y, |j| output_rests[j]);
+            let v = c * term.value(output, q_rest);
             g += v;
             magnitude += v.abs();
-            dg += c * term.output_derivative(y, q_rest);
+            if term.reads_own_output() {
+                dg += c * term.output_derivative(y, q_rest);
+            }
         }
         // Converged once the residual is down to the rounding of its own evaluation: the step's
         // rounding, ε/(1 − G′), is 10⁻¹³ for lightly damped modes, so a step test cannot decide.
@@ -210,15 +279,16 @@ pub fn diverged(value: f64) -> bool {
     !value.is_finite() || value.abs() > DIVERGENCE_BOUND
 }
 
-/// Free run (Eq. 10): ŷ(t) = Σ θ_i g_i(ẑ(t)) from the rest state, the outputs fed back. Writes
-/// `out[0..q.len()]`; fails when the run leaves [−bound, bound] or stops being finite.
-pub fn free_run(terms: &[NarxTerm], theta: &[f64], q: &[f64], rest: (f64, f64), out: &mut [f64]) -> Result<()> {
-    let n = q.len();
-    out[0] = rest.0;
+/// Free run (Eq. 10) of one mode: ŷ(t) = Σ θ_i g_i(ẑ(t)) from the rest state, its own outputs fed
+/// back, the exogenous series read as given. Writes `out[0..q.len()]`; fails when the run leaves
+/// [−bound, bound] or stops being finite.
+pub fn free_run(terms: &[NarxTerm], theta: &[f64], ex: &Exogenous, rest: f64, out: &mut [f64]) -> Result<()> {
+    let n = ex.q.len();
+    out[0] = rest;
     for t in 1..n {
         let mut value = 0.0;
         for (term, c) in terms.iter().zip(theta) {
-            value += c * term.value(lagged(out, t, term.output_lag, rest.0), lagged(q, t, term.input_lag, rest.1));
+            value += c * ex.value(term, out, rest, t);
         }
         if diverged(value) {
             return Err(Error::Numerical(format!("the free run diverged at step {t}")));
@@ -226,6 +296,46 @@ pub fn free_run(terms: &[NarxTerm], theta: &[f64], q: &[f64], rest: (f64, f64), 
         out[t] = value;
     }
     Ok(())
+}
+
+/// Joint free run of every mode, each reading the others' simulated outputs: the metamodel's
+/// prediction. `models[m]` = (terms, θ); `inputs[m]` the mode's scaled input (rest 0), the rests
+/// solved jointly. Returns the scaled outputs.
+pub fn joint_free_run(models: &[(&[NarxTerm], &[f64])], inputs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
+    let modes = models.len();
+    let n = inputs.first().map_or(0, Vec::len);
+    // Rest state by Gauss-Seidel on the modes' fixed points (the coupling is weak).
+    let mut rests = vec![0.0; modes];
+    for _ in 0..50 {
+        let before = rests.clone();
+        for (m, (terms, theta)) in models.iter().enumerate() {
+            rests[m] = rest_output(terms, theta, 0.0, &rests, rests[m])?;
+        }
+        if rests.iter().zip(&before).all(|(a, b)| (a - b).abs() <= 1e-15 * a.abs().max(1e-300)) {
+            break;
+        }
+    }
+    let mut out: Vec<Vec<f64>> = rests.iter().map(|&r| vec![r; n]).collect();
+    for t in 1..n {
+        for (m, (terms, theta)) in models.iter().enumerate() {
+            let mut value = 0.0;
+            for (term, c) in terms.iter().zip(theta.iter()) {
+                let series = &out[term.output_mode.unwrap_or(m)];
+                let y = if term.output_lag > t {
+                    rests[term.output_mode.unwrap_or(m)]
+                } else {
+                    series[t - term.output_lag]
+                };
+                let q = if term.input_lag > t { 0.0 } else { inputs[m][t - term.input_lag] };
+                value += c * term.value(y, q);
+            }
+            if diverged(value) {
+                return Err(Error::Numerical(format!("mode {}: the free run diverged at step {t}", m + 1)));
+            }
+            out[m][t] = value;
+        }
+    }
+    Ok(out)
 }
 
 /// Mean relative error of a series (as in Mai et al.): Σ(y − ŷ)² / Σ(y − ȳ)².
@@ -242,9 +352,12 @@ mod tests {
 
     #[test]
     fn dictionary_sizes_match_the_paper() {
-        assert_eq!(NarxOptions::default().dictionary().len(), 10);
-        assert_eq!(NarxOptions { cross_terms: true, ..Default::default() }.dictionary().len(), 22);
-        let names: Vec<String> = NarxOptions::default().dictionary().iter().map(|t| t.to_string()).collect();
+        let paper = NarxOptions { coupling_lags: 0, ..Default::default() };
+        assert_eq!(paper.dictionary(0, 3).len(), 10);
+        assert_eq!(NarxOptions { cross_terms: true, ..paper.clone() }.dictionary(0, 3).len(), 22);
+        assert_eq!(NarxOptions::default().dictionary(1, 3).len(), 10 + 4);
+        let names: Vec<String> = NarxOptions::default().dictionary(1, 3).iter().map(|t| t.to_string()).collect();
+        assert!(names.contains(&"y3(t-2)".to_string()) && !names.contains(&"y2(t-1)".to_string()));
         assert_eq!(names[..4], ["1", "Q(t)", "Q(t-1)", "Q(t-2)"]);
         assert!(names.contains(&"y(t-2)^3".to_string()));
     }
@@ -253,22 +366,39 @@ mod tests {
     /// from rest under that input stays there.
     #[test]
     fn rest_state_and_free_run_of_a_linear_model() {
-        let terms = [
-            NarxTerm::CONSTANT,
-            NarxTerm { output_lag: 0, output_power: 0, input_lag: 0, input_power: 1 },
-            NarxTerm { output_lag: 1, output_power: 1, input_lag: 0, input_power: 0 },
-            NarxTerm { output_lag: 2, output_power: 1, input_lag: 0, input_power: 0 },
-        ];
+        let terms =
+            [NarxTerm::CONSTANT, NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(2, 1, None)];
         let theta = [0.01, 0.02, 1.9, -0.95];
-        let rest = rest_output(&terms, &theta, 2.0, 0.0).unwrap();
+        let rest = rest_output(&terms, &theta, 2.0, &[], 0.0).unwrap();
         assert!((rest - (0.01 + 0.04) / (1.0 - 1.9 + 0.95)).abs() < 1e-12);
         let q = vec![2.0; 50];
+        let ex = Exogenous { q: &q, q_rest: 2.0, outputs: &[], output_rests: &[] };
         let mut out = vec![0.0; 50];
-        free_run(&terms, &theta, &q, (rest, 2.0), &mut out).unwrap();
+        free_run(&terms, &theta, &ex, rest, &mut out).unwrap();
         assert!(out.iter().all(|v| (v - rest).abs() < 1e-12));
         // An unstable model is reported, not returned.
         let unstable = [0.0, 0.02, 2.1, -0.9];
+        let q = vec![1.0; 5000];
+        let ex = Exogenous { q: &q, q_rest: 1.0, outputs: &[], output_rests: &[] };
         let mut out = vec![0.0; 5000];
-        assert!(free_run(&terms, &unstable, &vec![1.0; 5000], (0.0, 1.0), &mut out).is_err());
+        assert!(free_run(&terms, &unstable, &ex, 0.0, &mut out).is_err());
+    }
+
+    /// Two coupled modes run jointly equal a hand-written recursion.
+    #[test]
+    fn joint_free_run_couples_the_modes() {
+        let a = [NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(1, 1, Some(1))];
+        let b = [NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(2, 1, Some(0))];
+        let (ta, tb) = ([0.5, 0.9, 0.05], [0.2, 0.8, -0.1]);
+        let inputs = vec![(0..20).map(|t| (t as f64).sin()).collect::<Vec<f64>>(), vec![1.0; 20]];
+        let out = joint_free_run(&[(&a, &ta), (&b, &tb)], &inputs).unwrap();
+        let (mut ya, mut yb) = (vec![0.0; 20], vec![0.0; 20]);
+        for t in 1..20 {
+            ya[t] = 0.5 * inputs[0][t] + 0.9 * ya[t - 1] + 0.05 * yb[t - 1];
+            yb[t] = 0.2 * inputs[1][t] + 0.8 * yb[t - 1] - 0.1 * if t >= 2 { ya[t - 2] } else { 0.0 };
+        }
+        for t in 0..20 {
+            assert!((out[0][t] - ya[t]).abs() < 1e-14 && (out[1][t] - yb[t]).abs() < 1e-14);
+        }
     }
 }
