@@ -131,7 +131,7 @@ pub struct ModeDiagnostics {
     pub coefficient_loo_errors: Vec<f64>,
     /// Terms kept in each coefficient's expansion.
     pub coefficient_pce_terms: Vec<usize>,
-    /// Experiments whose free run diverged (counted as error 1 in the means... never silently).
+    /// Experiments whose free run diverged; their error is infinite, so the means above show it.
     pub diverged_experiments: usize,
 }
 
