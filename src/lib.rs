@@ -12,6 +12,7 @@ pub mod dynamics;
 pub mod error;
 mod linalg;
 pub mod problem;
+pub mod service;
 pub mod structure;
 pub mod surrogate;
 pub mod uncertainty;

@@ -18,6 +18,8 @@ struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Run the HTTP service (embedded SQLite by default).
+    Serve(windmeta::service::ServeArgs),
     /// Natural frequencies, periods, generalized masses and roof-normalised mode shapes.
     Modes(cli::ModesArgs),
     /// One storm through the reference model at the inputs' means (or fixed values).
@@ -37,6 +39,7 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
+        Command::Serve(args) => windmeta::service::serve(args),
         Command::Modes(args) => cli::modes(args),
         Command::Simulate(args) => cli::simulate(args),
         Command::SamplePeaks(args) => cli::sample_peaks(args),

@@ -1,0 +1,28 @@
+//! `windmeta serve` settings, as flags or environment variables.
+
+use clap::Args;
+
+#[derive(Debug, Clone, Args)]
+pub struct ServeArgs {
+    /// Address to listen on (port 0: any free port).
+    #[arg(long, env = "WINDMETA_LISTEN", default_value = "127.0.0.1:8080")]
+    pub listen: String,
+    /// Database: an SQLite file (created if missing) or, later, postgres://….
+    #[arg(long, env = "DATABASE_URL", default_value = "sqlite://windmeta.db")]
+    pub database_url: String,
+    /// Calibration jobs run at once (each uses every core through rayon).
+    #[arg(long, env = "WINDMETA_WORKERS", default_value_t = 1)]
+    pub workers: usize,
+    /// Largest request body accepted (bytes).
+    #[arg(long, env = "WINDMETA_MAX_BODY_BYTES", default_value_t = 4 * 1024 * 1024)]
+    pub max_body_bytes: usize,
+    /// Most samples an exceedance request may ask for.
+    #[arg(long, env = "WINDMETA_MAX_SAMPLES", default_value_t = 20_000)]
+    pub max_samples: usize,
+    /// Most experiments a calibration may ask for.
+    #[arg(long, env = "WINDMETA_MAX_EXPERIMENTS", default_value_t = 1000)]
+    pub max_experiments: usize,
+    /// A job's lease (ms): a worker that stops renewing it for this long loses the job.
+    #[arg(long, env = "WINDMETA_LEASE_MS", default_value_t = 30_000)]
+    pub lease_ms: i64,
+}

@@ -1,0 +1,112 @@
+//! The calibration workers: each claims a job from the lease table, runs it on a blocking thread
+//! (the numerical core parallelises with rayon there, never on the async runtime), renews the lease
+//! and saves progress every second, and stores the metamodel with the job's completion in one
+//! transaction. A worker that dies loses its lease and the job is taken up again.
+
+use super::store::Store;
+use super::{AppState, CalibrationRequest};
+use crate::error::Error;
+use crate::surrogate::{Observer, Progress, calibrate};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// What the blocking calibration shares with its async supervisor.
+struct Shared {
+    /// Latest progress, saved at the next heartbeat.
+    progress: Mutex<Option<Progress>>,
+    /// Set by the supervisor on a cancel request or shutdown; read by the calibration between steps.
+    cancel: AtomicBool,
+}
+
+impl Observer for Shared {
+    fn progress(&self, progress: Progress) {
+        *self.progress.lock().expect("progress lock") = Some(progress);
+    }
+    fn cancelled(&self) -> bool {
+        self.cancel.load(Ordering::Relaxed)
+    }
+}
+
+/// Runs `count` workers until shutdown.
+pub fn spawn_workers(state: AppState, count: usize) -> Vec<tokio::task::JoinHandle<()>> {
+    (0..count)
+        .map(|_| {
+            let state = state.clone();
+            tokio::spawn(async move { worker(state).await })
+        })
+        .collect()
+}
+
+async fn worker(state: AppState) {
+    let owner = format!("worker-{}", uuid::Uuid::new_v4());
+    while !state.draining.load(Ordering::Relaxed) {
+        match state.store.claim(&owner, state.config.lease_ms).await {
+            Ok(Some(job)) => run(&state, &owner, job.id, job.request).await,
+            Ok(None) => {
+                tokio::select! {
+                    _ = state.wake.notified() => {}
+                    _ = tokio::time::sleep(Duration::from_millis(500)) => {}
+                }
+            }
+            Err(error) => {
+                tracing::error!(%error, "claiming a job failed");
+                tokio::time::sleep(Duration::from_secs(1)).await;
+            }
+        }
+    }
+}
+
+async fn run(state: &AppState, owner: &str, id: String, request: String) {
+    let store: &Store = &state.store;
+    let parsed = serde_json::from_str::<CalibrationRequest>(&request)
+        .map_err(|e| Error::invalid("request", e.to_string()))
+        .and_then(|r| r.resolve(&state.config));
+    let (problem, options) = match parsed {
+        Ok(p) => p,
+        Err(error) => {
+            let _ = store.finish(&id, owner, "failed", Some(&error.to_string())).await;
+            return;
+        }
+    };
+    tracing::info!(job = %id, "calibration started");
+    let shared = Arc::new(Shared { progress: Mutex::new(None), cancel: AtomicBool::new(false) });
+    let observer = shared.clone();
+    let preset = problem.name.clone();
+    let mut task = tokio::task::spawn_blocking(move || calibrate(&problem, &options, observer.as_ref()));
+    let mut ticker = tokio::time::interval(Duration::from_secs(1));
+    let result = loop {
+        tokio::select! {
+            result = &mut task => break result,
+            _ = ticker.tick() => {
+                let progress = shared.progress.lock().expect("progress lock").clone();
+                let text = progress.map(|p| serde_json::to_string(&p).expect("progress serialises"));
+                match store.heartbeat(&id, owner, state.config.lease_ms, text.as_deref()).await {
+                    Ok(Some(cancel)) => if cancel { shared.cancel.store(true, Ordering::Relaxed) },
+                    Ok(None) => shared.cancel.store(true, Ordering::Relaxed), // lease lost: stop, discard
+                    Err(error) => tracing::warn!(%error, "heartbeat failed"),
+                }
+                if state.draining.load(Ordering::Relaxed) {
+                    shared.cancel.store(true, Ordering::Relaxed);
+                }
+            }
+        }
+    };
+    let outcome = match result {
+        Ok(Ok(metamodel)) => {
+            let metamodel_id = uuid::Uuid::new_v4().to_string();
+            let body = serde_json::to_string(&metamodel).expect("a metamodel serialises");
+            store.complete(&id, owner, &metamodel_id, &preset, &body).await.map(|_| ())
+        }
+        Ok(Err(Error::Cancelled)) if state.draining.load(Ordering::Relaxed) => store.release(&id, owner).await,
+        Ok(Err(Error::Cancelled)) => store.finish(&id, owner, "cancelled", None).await.map(|_| ()),
+        Ok(Err(error)) => store.finish(&id, owner, "failed", Some(&error.to_string())).await.map(|_| ()),
+        Err(panic) => {
+            store.finish(&id, owner, "failed", Some(&format!("the calibration panicked: {panic}"))).await.map(|_| ())
+        }
+    };
+    if let Err(error) = outcome {
+        tracing::error!(%error, job = %id, "recording the outcome failed");
+    }
+    tracing::info!(job = %id, "calibration ended");
+}

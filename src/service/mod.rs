@@ -1,0 +1,180 @@
+//! The HTTP service (axum on tokio): calibration jobs run by workers off the async runtime, stored
+//! metamodels, exceedance requests. The only module with tokio, axum and sqlx.
+
+mod config;
+mod error;
+mod jobs;
+mod routes;
+mod store;
+
+pub use config::ServeArgs;
+
+use crate::error::{Error, Result};
+use crate::problem::{Problem, ProblemSpec};
+use crate::structure::CustomStructure;
+use crate::surrogate::{CalibrationOptions, Metamodel, Refinement};
+use crate::uncertainty::Marginal;
+use crate::wind::WindSite;
+use serde::{Deserialize, Serialize};
+use std::collections::{BTreeMap, HashMap};
+use std::net::SocketAddr;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use store::Store;
+use tokio::net::TcpListener;
+use tokio::sync::Notify;
+
+/// A stored metamodel read back, with the study it rebuilds.
+type Loaded = Arc<(Metamodel, Problem)>;
+
+/// What every handler and worker shares.
+#[derive(Clone)]
+pub struct AppState {
+    store: Store,
+    config: Arc<ServeArgs>,
+    /// Wakes an idle worker when a job is queued (they also poll, for jobs queued elsewhere).
+    wake: Arc<Notify>,
+    /// Set on shutdown: readiness fails, workers stop claiming and give their jobs back.
+    draining: Arc<AtomicBool>,
+    /// Metamodels read back from the store, with their rebuilt studies, by id.
+    loaded: Arc<Mutex<HashMap<String, Loaded>>>,
+}
+
+/// `POST /v1/calibrations`: every field optional, the paper's values by default.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct CalibrationRequest {
+    pub preset: Option<String>,
+    pub structure: Option<CustomStructure>,
+    pub inputs: BTreeMap<String, Marginal>,
+    pub wind: Option<WindSite>,
+    pub damper_exponent: Option<f64>,
+    pub modes: Option<usize>,
+    pub duration_s: Option<f64>,
+    pub time_step_s: Option<f64>,
+    pub experiments: Option<usize>,
+    pub seed: Option<u64>,
+    pub narx: Option<crate::surrogate::narx::NarxOptions>,
+    pub pce: Option<crate::surrogate::pce::PceOptions>,
+    pub refinement: Option<Refinement>,
+}
+
+impl CalibrationRequest {
+    /// The study and the options, checked; errors name the field.
+    pub fn resolve(&self, config: &ServeArgs) -> Result<(Problem, CalibrationOptions)> {
+        let preset = if self.preset.is_none() && self.structure.is_none() {
+            Some("frame40-kn".into())
+        } else {
+            self.preset.clone()
+        };
+        let spec = ProblemSpec {
+            preset,
+            structure: self.structure.clone(),
+            inputs: self.inputs.clone(),
+            wind: self.wind.clone(),
+            damper_exponent: self.damper_exponent,
+            modes: self.modes,
+            duration_s: self.duration_s,
+            time_step_s: self.time_step_s,
+        };
+        let problem = Problem::from_spec(&spec)?;
+        let defaults = CalibrationOptions::default();
+        let options = CalibrationOptions {
+            experiments: self.experiments.unwrap_or(defaults.experiments),
+            seed: self.seed.unwrap_or(defaults.seed),
+            narx: self.narx.clone().unwrap_or(defaults.narx),
+            pce: self.pce.clone().unwrap_or(defaults.pce),
+            refinement: self.refinement.unwrap_or(defaults.refinement),
+            ..defaults
+        };
+        options.validate()?;
+        if options.experiments > config.max_experiments {
+            return Err(Error::invalid("experiments", format!("at most {} on this server", config.max_experiments)));
+        }
+        Ok((problem, options))
+    }
+}
+
+/// A bound, ready-to-run service.
+pub struct Application {
+    listener: TcpListener,
+    state: AppState,
+}
+
+impl Application {
+    /// Connects the database (running migrations) and binds the address (port 0 for any).
+    pub async fn build(config: ServeArgs) -> std::result::Result<Application, String> {
+        let store =
+            Store::connect(&config.database_url).await.map_err(|e| format!("database {}: {e}", config.database_url))?;
+        let listener =
+            TcpListener::bind(&config.listen).await.map_err(|e| format!("cannot listen on {}: {e}", config.listen))?;
+        let state = AppState {
+            store,
+            config: Arc::new(config),
+            wake: Arc::new(Notify::new()),
+            draining: Arc::new(AtomicBool::new(false)),
+            loaded: Arc::new(Mutex::new(HashMap::new())),
+        };
+        Ok(Application { listener, state })
+    }
+
+    pub fn local_addr(&self) -> SocketAddr {
+        self.listener.local_addr().expect("a bound listener has an address")
+    }
+
+    /// Serves until `shutdown` resolves, then drains: stops claiming, gives running jobs back to
+    /// the queue, finishes open requests.
+    pub async fn run(self, shutdown: impl std::future::Future<Output = ()> + Send + 'static) -> std::io::Result<()> {
+        let workers = jobs::spawn_workers(self.state.clone(), self.state.config.workers);
+        let draining = self.state.draining.clone();
+        let app = routes::router(self.state.clone());
+        axum::serve(self.listener, app)
+            .with_graceful_shutdown(async move {
+                shutdown.await;
+                draining.store(true, Ordering::Relaxed);
+            })
+            .await?;
+        self.state.draining.store(true, Ordering::Relaxed);
+        for worker in workers {
+            let _ = worker.await;
+        }
+        Ok(())
+    }
+}
+
+async fn shutdown_signal() {
+    let interrupt = async {
+        let _ = tokio::signal::ctrl_c().await;
+    };
+    #[cfg(unix)]
+    let terminate = async {
+        if let Ok(mut signal) = tokio::signal::unix::signal(tokio::signal::unix::SignalKind::terminate()) {
+            signal.recv().await;
+        }
+    };
+    #[cfg(not(unix))]
+    let terminate = std::future::pending::<()>();
+    tokio::select! {
+        _ = interrupt => {}
+        _ = terminate => {}
+    }
+    tracing::info!("shutting down");
+}
+
+/// `windmeta serve`: runs the service until interrupted.
+pub fn serve(args: &ServeArgs) -> Result<String> {
+    let _ = tracing_subscriber::fmt()
+        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
+        .try_init();
+    if args.workers == 0 {
+        return Err(Error::invalid("workers", "at least one worker is needed"));
+    }
+    let runtime =
+        tokio::runtime::Runtime::new().map_err(|e| Error::Numerical(format!("cannot start the runtime: {e}")))?;
+    runtime.block_on(async {
+        let app = Application::build(args.clone()).await.map_err(|e| Error::invalid("serve", e))?;
+        tracing::info!(address = %app.local_addr(), database = %args.database_url, "windmeta listening");
+        app.run(shutdown_signal()).await.map_err(|e| Error::Numerical(format!("server: {e}")))
+    })?;
+    Ok("stopped".into())
+}

@@ -1,0 +1,271 @@
+//! The database: calibration jobs as a lease table, and the stored metamodels. One portable schema
+//! (migrations/) over sqlx's `AnyPool`, runtime queries only, times as epoch milliseconds.
+
+use sqlx::any::{AnyPoolOptions, install_default_drivers};
+use sqlx::{AnyPool, Row};
+use std::time::{SystemTime, UNIX_EPOCH};
+
+pub fn now_ms() -> i64 {
+    SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_millis() as i64)
+}
+
+/// A job as stored.
+#[derive(Debug, Clone)]
+pub struct JobRow {
+    pub id: String,
+    pub kind: String,
+    pub state: String,
+    pub request: String,
+    pub progress: Option<String>,
+    pub error: Option<String>,
+    pub metamodel_id: Option<String>,
+    pub attempts: i64,
+    pub created_at: i64,
+    pub started_at: Option<i64>,
+    pub finished_at: Option<i64>,
+}
+
+/// A stored metamodel's summary.
+#[derive(Debug, Clone)]
+pub struct MetamodelRow {
+    pub id: String,
+    pub job_id: Option<String>,
+    pub preset: String,
+    pub created_at: i64,
+}
+
+/// The database behind the service; cheap to clone (a pool handle).
+#[derive(Debug, Clone)]
+pub struct Store {
+    pool: AnyPool,
+}
+
+/// The job columns, spliced into literal queries (sqlx accepts only audited literal SQL).
+macro_rules! job_columns {
+    () => {
+        "id, kind, state, request, progress, error, metamodel_id, attempts, created_at, started_at, finished_at"
+    };
+}
+
+fn job(row: &sqlx::any::AnyRow) -> Result<JobRow, sqlx::Error> {
+    Ok(JobRow {
+        id: row.try_get("id")?,
+        kind: row.try_get("kind")?,
+        state: row.try_get("state")?,
+        request: row.try_get("request")?,
+        progress: row.try_get("progress")?,
+        error: row.try_get("error")?,
+        metamodel_id: row.try_get("metamodel_id")?,
+        attempts: row.try_get("attempts")?,
+        created_at: row.try_get("created_at")?,
+        started_at: row.try_get("started_at")?,
+        finished_at: row.try_get("finished_at")?,
+    })
+}
+
+impl Store {
+    /// Connects (creating a SQLite file if needed) and runs the migrations.
+    pub async fn connect(url: &str) -> Result<Store, sqlx::Error> {
+        install_default_drivers();
+        let url = if url.starts_with("sqlite:") && !url.contains("mode=") {
+            format!("{url}{}mode=rwc", if url.contains('?') { "&" } else { "?" })
+        } else {
+            url.to_string()
+        };
+        let pool = AnyPoolOptions::new()
+            .max_connections(if url.starts_with("sqlite:") { 1 } else { 8 })
+            .after_connect(|conn, _| {
+                Box::pin(async move {
+                    if conn.backend_name() == "SQLite" {
+                        sqlx::query("PRAGMA journal_mode = WAL").execute(&mut *conn).await?;
+                        sqlx::query("PRAGMA busy_timeout = 5000").execute(&mut *conn).await?;
+                    }
+                    Ok(())
+                })
+            })
+            .connect(&url)
+            .await?;
+        sqlx::migrate!().run(&pool).await?;
+        Ok(Store { pool })
+    }
+
+    pub async fn ping(&self) -> bool {
+        sqlx::query("SELECT 1").execute(&self.pool).await.is_ok()
+    }
+
+    pub async fn insert_job(&self, id: &str, kind: &str, request: &str) -> Result<(), sqlx::Error> {
+        sqlx::query("INSERT INTO jobs (id, kind, state, request, created_at) VALUES ($1, $2, 'queued', $3, $4)")
+            .bind(id)
+            .bind(kind)
+            .bind(request)
+            .bind(now_ms())
+            .execute(&self.pool)
+            .await?;
+        Ok(())
+    }
+
+    /// Claims the oldest queued job, or a running one whose lease ran out (its worker died).
+    pub async fn claim(&self, owner: &str, lease_ms: i64) -> Result<Option<JobRow>, sqlx::Error> {
+        let now = now_ms();
+        let query = concat!(
+            "UPDATE jobs SET state = 'running', lease_owner = $1, lease_until = $2, attempts = attempts + 1, ",
+            "started_at = COALESCE(started_at, $3) ",
+            "WHERE id = (SELECT id FROM jobs WHERE state = 'queued' OR (state = 'running' AND lease_until < $3) ",
+            "ORDER BY created_at LIMIT 1) RETURNING ",
+            job_columns!()
+        );
+        let row = sqlx::query(query).bind(owner).bind(now + lease_ms).bind(now).fetch_optional(&self.pool).await?;
+        row.as_ref().map(job).transpose()
+    }
+
+    /// Extends the lease and saves progress; returns whether cancellation was asked for, or None
+    /// when the lease is no longer ours.
+    pub async fn heartbeat(
+        &self,
+        id: &str,
+        owner: &str,
+        lease_ms: i64,
+        progress: Option<&str>,
+    ) -> Result<Option<bool>, sqlx::Error> {
+        let row = sqlx::query(
+            "UPDATE jobs SET lease_until = $1, progress = COALESCE($2, progress) \
+             WHERE id = $3 AND lease_owner = $4 AND state = 'running' RETURNING cancel_requested",
+        )
+        .bind(now_ms() + lease_ms)
+        .bind(progress)
+        .bind(id)
+        .bind(owner)
+        .fetch_optional(&self.pool)
+        .await?;
+        Ok(row.map(|r| r.try_get::<i32, _>("cancel_requested").unwrap_or(0) != 0))
+    }
+
+    /// Stores the metamodel and marks the job done, both or neither; false when the lease was lost
+    /// (another worker owns the job now, so this result is discarded).
+    pub async fn complete(
+        &self,
+        id: &str,
+        owner: &str,
+        metamodel_id: &str,
+        preset: &str,
+        body: &str,
+    ) -> Result<bool, sqlx::Error> {
+        let mut tx = self.pool.begin().await?;
+        let now = now_ms();
+        let updated = sqlx::query(
+            "UPDATE jobs SET state = 'succeeded', metamodel_id = $1, finished_at = $2, lease_owner = NULL \
+             WHERE id = $3 AND lease_owner = $4 AND state = 'running'",
+        )
+        .bind(metamodel_id)
+        .bind(now)
+        .bind(id)
+        .bind(owner)
+        .execute(&mut *tx)
+        .await?;
+        if updated.rows_affected() != 1 {
+            tx.rollback().await?;
+            return Ok(false);
+        }
+        sqlx::query("INSERT INTO metamodels (id, job_id, preset, created_at, body) VALUES ($1, $2, $3, $4, $5)")
+            .bind(metamodel_id)
+            .bind(id)
+            .bind(preset)
+            .bind(now)
+            .bind(body)
+            .execute(&mut *tx)
+            .await?;
+        tx.commit().await?;
+        Ok(true)
+    }
+
+    /// Ends a job as failed or cancelled (if the lease is still ours).
+    pub async fn finish(&self, id: &str, owner: &str, state: &str, error: Option<&str>) -> Result<bool, sqlx::Error> {
+        let done = sqlx::query(
+            "UPDATE jobs SET state = $1, error = $2, finished_at = $3, lease_owner = NULL \
+             WHERE id = $4 AND lease_owner = $5 AND state = 'running'",
+        )
+        .bind(state)
+        .bind(error)
+        .bind(now_ms())
+        .bind(id)
+        .bind(owner)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected() == 1)
+    }
+
+    /// Gives a running job back to the queue (graceful shutdown): another start takes it up.
+    pub async fn release(&self, id: &str, owner: &str) -> Result<(), sqlx::Error> {
+        sqlx::query("UPDATE jobs SET state = 'queued', lease_owner = NULL, lease_until = NULL WHERE id = $1 AND lease_owner = $2 AND state = 'running'")
+            .bind(id)
+            .bind(owner)
+            .execute(&self.pool)
+            .await?;
+        Ok(())
+    }
+
+    /// Asks a job to stop: a queued one is cancelled at once, a running one at its next heartbeat.
+    pub async fn request_cancel(&self, id: &str) -> Result<Option<JobRow>, sqlx::Error> {
+        sqlx::query("UPDATE jobs SET state = 'cancelled', finished_at = $1 WHERE id = $2 AND state = 'queued'")
+            .bind(now_ms())
+            .bind(id)
+            .execute(&self.pool)
+            .await?;
+        sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = $1 AND state = 'running'")
+            .bind(id)
+            .execute(&self.pool)
+            .await?;
+        self.job(id).await
+    }
+
+    pub async fn job(&self, id: &str) -> Result<Option<JobRow>, sqlx::Error> {
+        let row = sqlx::query(concat!("SELECT ", job_columns!(), " FROM jobs WHERE id = $1"))
+            .bind(id)
+            .fetch_optional(&self.pool)
+            .await?;
+        row.as_ref().map(job).transpose()
+    }
+
+    pub async fn jobs(&self, limit: i64, offset: i64) -> Result<Vec<JobRow>, sqlx::Error> {
+        let rows = sqlx::query(concat!(
+            "SELECT ",
+            job_columns!(),
+            " FROM jobs ORDER BY created_at DESC, id LIMIT $1 OFFSET $2"
+        ))
+        .bind(limit)
+        .bind(offset)
+        .fetch_all(&self.pool)
+        .await?;
+        rows.iter().map(job).collect()
+    }
+
+    pub async fn metamodel_body(&self, id: &str) -> Result<Option<String>, sqlx::Error> {
+        let row = sqlx::query("SELECT body FROM metamodels WHERE id = $1").bind(id).fetch_optional(&self.pool).await?;
+        row.map(|r| r.try_get("body")).transpose()
+    }
+
+    pub async fn metamodels(&self, limit: i64, offset: i64) -> Result<Vec<MetamodelRow>, sqlx::Error> {
+        let rows = sqlx::query(
+            "SELECT id, job_id, preset, created_at FROM metamodels ORDER BY created_at DESC, id LIMIT $1 OFFSET $2",
+        )
+        .bind(limit)
+        .bind(offset)
+        .fetch_all(&self.pool)
+        .await?;
+        rows.iter()
+            .map(|r| {
+                Ok(MetamodelRow {
+                    id: r.try_get("id")?,
+                    job_id: r.try_get("job_id")?,
+                    preset: r.try_get("preset")?,
+                    created_at: r.try_get("created_at")?,
+                })
+            })
+            .collect()
+    }
+
+    pub async fn delete_metamodel(&self, id: &str) -> Result<bool, sqlx::Error> {
+        let done = sqlx::query("DELETE FROM metamodels WHERE id = $1").bind(id).execute(&self.pool).await?;
+        Ok(done.rows_affected() == 1)
+    }
+}

@@ -1,0 +1,227 @@
+//! The service over real HTTP: a server on port 0 against a real SQLite file. The whole flow at
+//! small size, bad input as problem+json, cancellation, and a restart in the middle of a job.
+
+use serde_json::{Value, json};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
+use tokio::sync::oneshot;
+use windmeta::service::{Application, ServeArgs};
+
+struct TestApp {
+    address: String,
+    client: reqwest::Client,
+    stop: Option<oneshot::Sender<()>>,
+    server: tokio::task::JoinHandle<std::io::Result<()>>,
+}
+
+fn database(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("windmeta-api-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join("windmeta.db")
+}
+
+async fn spawn_app(db: &std::path::Path) -> TestApp {
+    let args = ServeArgs {
+        listen: "127.0.0.1:0".into(),
+        database_url: format!("sqlite://{}", db.display()),
+        workers: 1,
+        max_body_bytes: 64 * 1024,
+        max_samples: 2000,
+        max_experiments: 400,
+        lease_ms: 2_000,
+    };
+    let app = Application::build(args).await.expect("the app builds");
+    let address = format!("http://{}", app.local_addr());
+    let (stop, stopped) = oneshot::channel::<()>();
+    let server = tokio::spawn(app.run(async move {
+        let _ = stopped.await;
+    }));
+    TestApp { address, client: reqwest::Client::new(), stop: Some(stop), server }
+}
+
+impl TestApp {
+    async fn get(&self, path: &str) -> (u16, Value) {
+        let r = self.client.get(format!("{}{path}", self.address)).send().await.unwrap();
+        let status = r.status().as_u16();
+        (status, r.json().await.unwrap_or(Value::Null))
+    }
+
+    async fn post(&self, path: &str, body: Value) -> reqwest::Response {
+        self.client.post(format!("{}{path}", self.address)).json(&body).send().await.unwrap()
+    }
+
+    async fn wait_for(&self, id: &str, states: &[&str], limit: Duration) -> Value {
+        let started = Instant::now();
+        loop {
+            let (_, op) = self.get(&format!("/v1/operations/{id}")).await;
+            if states.contains(&op["state"].as_str().unwrap_or("")) {
+                return op;
+            }
+            assert!(started.elapsed() < limit, "operation stuck: {op}");
+            tokio::time::sleep(Duration::from_millis(200)).await;
+        }
+    }
+
+    async fn stop(mut self) {
+        let _ = self.stop.take().unwrap().send(());
+        self.server.await.unwrap().unwrap();
+    }
+}
+
+fn assert_problem(response_status: u16, content_type: &str, body: &Value, status: u16, mentions: &str) {
+    assert_eq!(response_status, status, "{body}");
+    assert_eq!(content_type, "application/problem+json");
+    assert_eq!(body["status"], status);
+    assert!(body.to_string().contains(mentions), "expected `{mentions}` in {body}");
+}
+
+async fn problem(response: reqwest::Response) -> (u16, String, Value) {
+    let status = response.status().as_u16();
+    let content_type =
+        response.headers().get("content-type").map(|v| v.to_str().unwrap().to_string()).unwrap_or_default();
+    (status, content_type, response.json().await.unwrap_or(Value::Null))
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn calibrate_follow_fetch_and_sample() {
+    let app = spawn_app(&database("flow")).await;
+    assert_eq!(app.get("/healthz").await.0, 200);
+    assert_eq!(app.get("/readyz").await.0, 200);
+    let (status, presets) = app.get("/v1/presets").await;
+    assert_eq!(status, 200);
+    assert_eq!(presets["presets"].as_array().unwrap().len(), 2);
+    assert_eq!(app.get("/v1/presets/frame40").await.1["floors"], 40);
+
+    let response = app
+        .post("/v1/calibrations", json!({"preset": "frame40-kn", "experiments": 8, "duration_s": 30, "seed": 3}))
+        .await;
+    assert_eq!(response.status().as_u16(), 202);
+    let location = response.headers()["location"].to_str().unwrap().to_string();
+    let op: Value = response.json().await.unwrap();
+    assert_eq!(location, format!("/v1/operations/{}", op["id"].as_str().unwrap()));
+    let done = app.wait_for(op["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(120)).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    let id = done["metamodel_id"].as_str().unwrap().to_string();
+
+    let (status, metamodel) = app.get(&format!("/v1/metamodels/{id}")).await;
+    assert_eq!(status, 200);
+    assert_eq!(metamodel["format"], "windmeta-pc-narx");
+    assert_eq!(metamodel["models"].as_array().unwrap().len(), 3);
+    assert_eq!(app.get("/v1/metamodels").await.1["metamodels"][0]["id"], id.as_str());
+
+    let path = format!("/v1/metamodels/{id}/exceedance");
+    let curve: Value =
+        app.post(&path, json!({"samples": 30, "seed": 2, "fixed": {"wind_speed": 32}})).await.json().await.unwrap();
+    for key in ["thresholds", "probabilities", "lower", "upper"] {
+        assert!(curve[key].as_array().is_some_and(|a| !a.is_empty()), "{key}: {curve}");
+    }
+    assert_eq!(curve["samples"], 30);
+    let csv = app
+        .client
+        .post(format!("{}{path}", app.address))
+        .header("accept", "text/csv")
+        .json(&json!({"samples": 10}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(csv.headers()["content-type"], "text/csv");
+    assert!(csv.text().await.unwrap().starts_with("threshold_m,probability,lower,upper"));
+    let svg = app
+        .client
+        .post(format!("{}{path}", app.address))
+        .header("accept", "image/svg+xml")
+        .json(&json!({"samples": 10}))
+        .send()
+        .await
+        .unwrap();
+    assert!(svg.text().await.unwrap().starts_with("<svg"));
+
+    let deleted = app.client.delete(format!("{}/v1/metamodels/{id}", app.address)).send().await.unwrap();
+    assert_eq!(deleted.status().as_u16(), 204);
+    assert_eq!(app.get(&format!("/v1/metamodels/{id}")).await.0, 404);
+    app.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn bad_input_is_refused_as_problem_json() {
+    let app = spawn_app(&database("bad")).await;
+    let raw = app
+        .client
+        .post(format!("{}/v1/calibrations", app.address))
+        .header("content-type", "application/json")
+        .body("{not json")
+        .send()
+        .await
+        .unwrap();
+    let (s, ct, body) = problem(raw).await;
+    assert_problem(s, &ct, &body, 400, "");
+    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"experiments": "many"})).await).await;
+    assert_problem(s, &ct, &body, 422, "experiments");
+    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"preset": "frame41"})).await).await;
+    assert_problem(s, &ct, &body, 422, "preset");
+    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"experiments": -5})).await).await;
+    assert_problem(s, &ct, &body, 422, "experiments");
+    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"experiments": 2})).await).await;
+    assert_problem(s, &ct, &body, 422, "experiments");
+    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"duration_s": 0})).await).await;
+    assert_problem(s, &ct, &body, 422, "duration_s");
+    let (s, ct, body) = problem(
+        app.post("/v1/calibrations", json!({"inputs": {"stiffness": {"distribution": "constant", "value": 1}}})).await,
+    )
+    .await;
+    assert_problem(s, &ct, &body, 422, "unknown input");
+    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"surprise": 1})).await).await;
+    assert_problem(s, &ct, &body, 422, "surprise");
+    let huge = json!({"preset": "frame40", "structure": {"mass": vec![vec![1.0; 200]; 200]}});
+    let (s, ct, body) = problem(app.post("/v1/calibrations", huge).await).await;
+    assert_problem(s, &ct, &body, 413, "");
+    let (s, ct, body) =
+        problem(app.client.get(format!("{}/v1/operations/nope", app.address)).send().await.unwrap()).await;
+    assert_problem(s, &ct, &body, 404, "nope");
+    let (s, ct, body) = problem(app.post("/v1/metamodels/nope/exceedance", json!({"samples": 10})).await).await;
+    assert_problem(s, &ct, &body, 404, "nope");
+    let (s, ct, body) = problem(app.post("/v1/metamodels/nope/exceedance", json!({"samples": -1})).await).await;
+    assert_problem(s, &ct, &body, 422, "samples");
+    app.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn cancellation_stops_a_running_calibration() {
+    let app = spawn_app(&database("cancel")).await;
+    let op: Value = app.post("/v1/calibrations", json!({"experiments": 200})).await.json().await.unwrap();
+    let id = op["id"].as_str().unwrap();
+    app.wait_for(id, &["running"], Duration::from_secs(30)).await;
+    let asked = Instant::now();
+    let response = app.post(&format!("/v1/operations/{id}/cancel"), json!({})).await;
+    assert_eq!(response.status().as_u16(), 200);
+    let op = app.wait_for(id, &["cancelled", "failed", "succeeded"], Duration::from_secs(30)).await;
+    assert_eq!(op["state"], "cancelled");
+    eprintln!("cancelled {:.1} s after the request", asked.elapsed().as_secs_f64());
+    app.stop().await;
+}
+
+/// Stop the server in the middle of a calibration, start it again on the same file: the job is
+/// taken up again and finishes; nothing stored is lost.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_restart_takes_the_job_up_again() {
+    let db = database("restart");
+    let first = spawn_app(&db).await;
+    let op: Value = first
+        .post("/v1/calibrations", json!({"experiments": 24, "duration_s": 120, "seed": 5}))
+        .await
+        .json()
+        .await
+        .unwrap();
+    let id = op["id"].as_str().unwrap().to_string();
+    first.wait_for(&id, &["running"], Duration::from_secs(30)).await;
+    tokio::time::sleep(Duration::from_millis(500)).await;
+    first.stop().await;
+    let second = spawn_app(&db).await;
+    let done = second.wait_for(&id, &["succeeded", "failed"], Duration::from_secs(180)).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    assert!(done["attempts"].as_i64().unwrap() >= 2, "{done}");
+    let metamodel = done["metamodel_id"].as_str().unwrap();
+    assert_eq!(second.get(&format!("/v1/metamodels/{metamodel}")).await.0, 200);
+    second.stop().await;
+}
