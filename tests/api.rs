@@ -22,7 +22,13 @@ fn database(name: &str) -> PathBuf {
 }
 
 async fn spawn_app(db: &std::path::Path) -> TestApp {
+    spawn_app_with(db, vec![], vec![]).await
+}
+
+async fn spawn_app_with(db: &std::path::Path, api_keys: Vec<String>, cors_origins: Vec<String>) -> TestApp {
     let args = ServeArgs {
+        api_keys,
+        cors_origins,
         listen: "127.0.0.1:0".into(),
         database_url: format!("sqlite://{}", db.display()),
         workers: 1,
@@ -100,6 +106,11 @@ async fn calibrate_follow_fetch_and_sample() {
     let location = response.headers()["location"].to_str().unwrap().to_string();
     let op: Value = response.json().await.unwrap();
     assert_eq!(location, format!("/v1/operations/{}", op["id"].as_str().unwrap()));
+    // The same operation as server-sent events, to the end.
+    let events = app.client.get(format!("{}{location}/events", app.address)).send().await.unwrap();
+    assert_eq!(events.headers()["content-type"], "text/event-stream");
+    let stream = tokio::time::timeout(Duration::from_secs(120), events.text()).await.expect("the stream ends").unwrap();
+    assert!(stream.contains("event: operation") && stream.contains("\"state\":\"succeeded\""), "{stream}");
     let done = app.wait_for(op["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(120)).await;
     assert_eq!(done["state"], "succeeded", "{done}");
     let id = done["metamodel_id"].as_str().unwrap().to_string();
@@ -224,4 +235,43 @@ async fn a_restart_takes_the_job_up_again() {
     let metamodel = done["metamodel_id"].as_str().unwrap();
     assert_eq!(second.get(&format!("/v1/metamodels/{metamodel}")).await.0, 200);
     second.stop().await;
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn api_keys_and_cors() {
+    let app = spawn_app_with(&database("auth"), vec!["s3cret".into()], vec!["https://office.example".into()]).await;
+    assert_eq!(app.get("/healthz").await.0, 200);
+    let (s, ct, body) = problem(app.client.get(format!("{}/v1/presets", app.address)).send().await.unwrap()).await;
+    assert_problem(s, &ct, &body, 401, "Bearer");
+    let wrong = app.client.get(format!("{}/v1/presets", app.address)).bearer_auth("guess").send().await.unwrap();
+    assert_eq!(wrong.status().as_u16(), 401);
+    assert_eq!(wrong.headers()["www-authenticate"], "Bearer");
+    let right = app.client.get(format!("{}/v1/presets", app.address)).bearer_auth("s3cret").send().await.unwrap();
+    assert_eq!(right.status().as_u16(), 200);
+    let preflight = app
+        .client
+        .request(reqwest::Method::OPTIONS, format!("{}/v1/calibrations", app.address))
+        .header("origin", "https://office.example")
+        .header("access-control-request-method", "POST")
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(preflight.headers()["access-control-allow-origin"], "https://office.example");
+    let other = app
+        .client
+        .get(format!("{}/healthz", app.address))
+        .header("origin", "https://elsewhere.example")
+        .send()
+        .await
+        .unwrap();
+    assert!(other.headers().get("access-control-allow-origin").is_none());
+    let exposed = app
+        .client
+        .get(format!("{}/healthz", app.address))
+        .header("origin", "https://office.example")
+        .send()
+        .await
+        .unwrap();
+    assert!(exposed.headers()["access-control-expose-headers"].to_str().unwrap().contains("location"));
+    app.stop().await;
 }

@@ -25,4 +25,10 @@ pub struct ServeArgs {
     /// A job's lease (ms): a worker that stops renewing it for this long loses the job.
     #[arg(long, env = "WINDMETA_LEASE_MS", default_value_t = 30_000)]
     pub lease_ms: i64,
+    /// Bearer API keys, comma separated; when given, every /v1 request needs one.
+    #[arg(long, env = "WINDMETA_API_KEYS", value_delimiter = ',', hide_env_values = true)]
+    pub api_keys: Vec<String>,
+    /// Origins allowed by CORS, comma separated (none: no CORS headers).
+    #[arg(long, env = "WINDMETA_CORS_ORIGINS", value_delimiter = ',')]
+    pub cors_origins: Vec<String>,
 }

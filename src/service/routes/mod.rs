@@ -1,5 +1,6 @@
 //! The routes, one router per resource, merged here with the layers every request passes.
 
+mod auth;
 mod calibrations;
 mod health;
 mod metamodels;
@@ -16,13 +17,17 @@ use tower_http::trace::TraceLayer;
 
 pub fn router(state: AppState) -> Router {
     let limit = state.config.max_body_bytes;
-    Router::new()
-        .merge(health::router())
+    let api = Router::new()
         .merge(presets::router())
         .merge(calibrations::router())
         .merge(operations::router())
         .merge(metamodels::router())
-        .with_state(state)
+        .layer(axum::middleware::from_fn_with_state(state.clone(), auth::require_api_key));
+    let mut app = Router::new().merge(health::router()).merge(api).with_state(state.clone());
+    if !state.config.cors_origins.is_empty() {
+        app = app.layer(auth::cors(&state.config.cors_origins));
+    }
+    app
         // axum's limit, not tower-http's: its rejection reaches `ApiJson` and becomes problem+json.
         .layer(axum::extract::DefaultBodyLimit::max(limit))
         .layer(PropagateRequestIdLayer::x_request_id())
