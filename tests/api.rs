@@ -148,6 +148,22 @@ async fn calibrate_follow_fetch_and_sample() {
         .unwrap();
     assert!(svg.text().await.unwrap().starts_with("<svg"));
 
+    // A validation job against the reference on fresh samples.
+    let response = app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 4, "seed": 9})).await;
+    assert_eq!(response.status().as_u16(), 202);
+    let validation: Value = response.json().await.unwrap();
+    let done =
+        app.wait_for(validation["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(120)).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    assert!(
+        done["result"]["peak_correlation"].is_number() && done["result"]["mean_relative_error"].is_number(),
+        "{done}"
+    );
+    assert_eq!(done["result"]["reference_peak"].as_array().unwrap().len(), 4);
+    let (s, ct, body) =
+        problem(app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 1})).await).await;
+    assert_problem(s, &ct, &body, 422, "samples");
+
     let deleted = app.client.delete(format!("{}/v1/metamodels/{id}", app.address)).send().await.unwrap();
     assert_eq!(deleted.status().as_u16(), 204);
     assert_eq!(app.get(&format!("/v1/metamodels/{id}")).await.0, 404);

@@ -1,17 +1,20 @@
-//! The calibration workers: each claims a job from the lease table, runs it on a blocking thread
-//! (the numerical core parallelises with rayon there, never on the async runtime), renews the lease
-//! and saves progress every second, and stores the metamodel with the job's completion in one
-//! transaction. A worker that dies loses its lease and the job is taken up again.
+//! The job workers (calibrations, validations): each claims a job from the lease table, runs it on
+//! a blocking thread (the numerical core parallelises with rayon there, never on the async
+//! runtime), renews the lease and saves progress every second, and stores the metamodel (or the
+//! report) with the job's completion, guarded by the lease. A worker that dies loses its lease and
+//! the job is taken up again.
 
 use super::store::Store;
-use super::{AppState, CalibrationRequest};
-use crate::error::Error;
-use crate::surrogate::{Observer, Progress, calibrate};
+use super::{AppState, CalibrationRequest, ValidationJob};
+use crate::analysis::{ValidationReport, validate};
+use crate::error::{Error, Result};
+use crate::problem::Problem;
+use crate::surrogate::{CalibrationOptions, Metamodel, Observer, Progress, calibrate};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
-/// What the blocking calibration shares with its async supervisor.
+/// What the blocking work shares with its async supervisor.
 struct Shared {
     /// Latest progress, saved at the next heartbeat.
     progress: Mutex<Option<Progress>>,
@@ -42,7 +45,7 @@ async fn worker(state: AppState) {
     let owner = format!("worker-{}", uuid::Uuid::new_v4());
     while !state.draining.load(Ordering::Relaxed) {
         match state.store.claim(&owner, state.config.lease_ms).await {
-            Ok(Some(job)) => run(&state, &owner, job.id, job.request).await,
+            Ok(Some(job)) => run(&state, &owner, job.id, &job.kind, job.request).await,
             Ok(None) => {
                 tokio::select! {
                     _ = state.wake.notified() => {}
@@ -57,23 +60,66 @@ async fn worker(state: AppState) {
     }
 }
 
-async fn run(state: &AppState, owner: &str, id: String, request: String) {
+/// What a job computes, ready to run on a blocking thread.
+enum Work {
+    Calibration(Box<Problem>, CalibrationOptions),
+    Validation(Box<(Metamodel, Problem)>, usize, u64),
+}
+
+/// What it produced.
+enum Output {
+    Metamodel(Box<Metamodel>),
+    Report(Box<ValidationReport>),
+}
+
+/// Reads a job's request into its work; the metamodel of a validation comes from the store.
+async fn prepare(store: &Store, kind: &str, request: &str, config: &super::ServeArgs) -> Result<Work> {
+    match kind {
+        "calibration" => {
+            let request: CalibrationRequest =
+                serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))?;
+            let (problem, options) = request.resolve(config)?;
+            Ok(Work::Calibration(Box::new(problem), options))
+        }
+        "validation" => {
+            let request: ValidationJob =
+                serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))?;
+            let body = store
+                .metamodel_body(&request.metamodel_id)
+                .await
+                .map_err(|e| Error::Numerical(format!("database: {e}")))?
+                .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
+            let metamodel = Metamodel::from_json(&body)?;
+            let problem = metamodel.problem()?;
+            Ok(Work::Validation(Box::new((metamodel, problem)), request.samples, request.seed))
+        }
+        other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
+    }
+}
+
+async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: String) {
     let store: &Store = &state.store;
-    let parsed = serde_json::from_str::<CalibrationRequest>(&request)
-        .map_err(|e| Error::invalid("request", e.to_string()))
-        .and_then(|r| r.resolve(&state.config));
-    let (problem, options) = match parsed {
-        Ok(p) => p,
+    let work = match prepare(store, kind, &request, &state.config).await {
+        Ok(work) => work,
         Err(error) => {
             let _ = store.finish(&id, owner, "failed", Some(&error.to_string())).await;
             return;
         }
     };
-    tracing::info!(job = %id, "calibration started");
+    tracing::info!(job = %id, kind, "job started");
     let shared = Arc::new(Shared { progress: Mutex::new(None), cancel: AtomicBool::new(false) });
     let observer = shared.clone();
-    let preset = problem.name.clone();
-    let mut task = tokio::task::spawn_blocking(move || calibrate(&problem, &options, observer.as_ref()));
+    let mut task = tokio::task::spawn_blocking(move || match work {
+        Work::Calibration(problem, options) => {
+            let name = problem.name.clone();
+            calibrate(&problem, &options, observer.as_ref()).map(|m| (Output::Metamodel(Box::new(m)), name))
+        }
+        Work::Validation(loaded, samples, seed) => {
+            let (metamodel, problem) = *loaded;
+            validate(&metamodel, &problem, samples, seed, observer.as_ref())
+                .map(|r| (Output::Report(Box::new(r)), problem.name))
+        }
+    });
     let mut ticker = tokio::time::interval(Duration::from_secs(1));
     let result = loop {
         tokio::select! {
@@ -93,20 +139,22 @@ async fn run(state: &AppState, owner: &str, id: String, request: String) {
         }
     };
     let outcome = match result {
-        Ok(Ok(metamodel)) => {
+        Ok(Ok((Output::Metamodel(metamodel), preset))) => {
             let metamodel_id = uuid::Uuid::new_v4().to_string();
             let body = serde_json::to_string(&metamodel).expect("a metamodel serialises");
             store.complete(&id, owner, &metamodel_id, &preset, &body).await.map(|_| ())
         }
+        Ok(Ok((Output::Report(report), _))) => {
+            let body = serde_json::to_string(&report).expect("a report serialises");
+            store.complete_with_result(&id, owner, &body).await.map(|_| ())
+        }
         Ok(Err(Error::Cancelled)) if state.draining.load(Ordering::Relaxed) => store.release(&id, owner).await,
         Ok(Err(Error::Cancelled)) => store.finish(&id, owner, "cancelled", None).await.map(|_| ()),
         Ok(Err(error)) => store.finish(&id, owner, "failed", Some(&error.to_string())).await.map(|_| ()),
-        Err(panic) => {
-            store.finish(&id, owner, "failed", Some(&format!("the calibration panicked: {panic}"))).await.map(|_| ())
-        }
+        Err(panic) => store.finish(&id, owner, "failed", Some(&format!("the job panicked: {panic}"))).await.map(|_| ()),
     };
     if let Err(error) = outcome {
         tracing::error!(%error, job = %id, "recording the outcome failed");
     }
-    tracing::info!(job = %id, "calibration ended");
+    tracing::info!(job = %id, "job ended");
 }

@@ -95,6 +95,31 @@ impl CalibrationRequest {
     }
 }
 
+/// `POST /v1/metamodels/{id}/validations`: fresh samples through the reference and the metamodel.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct ValidationRequest {
+    pub samples: usize,
+    pub seed: u64,
+}
+
+impl Default for ValidationRequest {
+    fn default() -> Self {
+        ValidationRequest { samples: 200, seed: 1000 }
+    }
+}
+
+/// A validation as queued: the request and the metamodel it is about.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ValidationJob {
+    pub metamodel_id: String,
+    pub samples: usize,
+    pub seed: u64,
+}
+
+/// Most samples a validation job may ask for (each is one reference storm).
+pub const MAX_VALIDATION_SAMPLES: usize = 5000;
+
 /// A bound, ready-to-run service.
 pub struct Application {
     listener: TcpListener,

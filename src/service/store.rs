@@ -19,6 +19,8 @@ pub struct JobRow {
     pub progress: Option<String>,
     pub error: Option<String>,
     pub metamodel_id: Option<String>,
+    /// JSON result of a job that produces a report (a validation).
+    pub result: Option<String>,
     pub attempts: i64,
     pub created_at: i64,
     pub started_at: Option<i64>,
@@ -43,7 +45,7 @@ pub struct Store {
 /// The job columns, spliced into literal queries (sqlx accepts only audited literal SQL).
 macro_rules! job_columns {
     () => {
-        "id, kind, state, request, progress, error, metamodel_id, attempts, created_at, started_at, finished_at"
+        "id, kind, state, request, progress, error, metamodel_id, result, attempts, created_at, started_at, finished_at"
     };
 }
 
@@ -56,6 +58,7 @@ fn job(row: &sqlx::any::AnyRow) -> Result<JobRow, sqlx::Error> {
         progress: row.try_get("progress")?,
         error: row.try_get("error")?,
         metamodel_id: row.try_get("metamodel_id")?,
+        result: row.try_get("result")?,
         attempts: row.try_get("attempts")?,
         created_at: row.try_get("created_at")?,
         started_at: row.try_get("started_at")?,
@@ -176,6 +179,21 @@ impl Store {
             .await?;
         tx.commit().await?;
         Ok(true)
+    }
+
+    /// Marks a report-producing job done with its result; false when the lease was lost.
+    pub async fn complete_with_result(&self, id: &str, owner: &str, result: &str) -> Result<bool, sqlx::Error> {
+        let done = sqlx::query(
+            "UPDATE jobs SET state = 'succeeded', result = $1, finished_at = $2, lease_owner = NULL \
+             WHERE id = $3 AND lease_owner = $4 AND state = 'running'",
+        )
+        .bind(result)
+        .bind(now_ms())
+        .bind(id)
+        .bind(owner)
+        .execute(&self.pool)
+        .await?;
+        Ok(done.rows_affected() == 1)
     }
 
     /// Ends a job as failed or cancelled (if the lease is still ours).

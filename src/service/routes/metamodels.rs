@@ -5,8 +5,8 @@ use crate::analysis::{
     Response, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg, metamodel_peaks,
 };
 use crate::problem::Problem;
-use crate::service::AppState;
 use crate::service::error::ApiError;
+use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
 use crate::surrogate::{Metamodel, Silent};
 use axum::extract::{Path, Query, State};
 use axum::http::{HeaderMap, StatusCode, header};
@@ -23,6 +23,7 @@ pub fn router() -> Router<AppState> {
         .route("/v1/metamodels", get(list))
         .route("/v1/metamodels/{id}", get(one).delete(remove))
         .route("/v1/metamodels/{id}/exceedance", post(exceedance))
+        .route("/v1/metamodels/{id}/validations", post(start_validation))
 }
 
 async fn list(State(state): State<AppState>, Query(page): Query<Page>) -> Result<Json<Value>, ApiError> {
@@ -162,4 +163,31 @@ async fn exceedance(
     body["response"] = response;
     body["metamodel_id"] = json!(id);
     Ok(Json(body).into_response())
+}
+
+/// Queues a validation of the metamodel against the reference on fresh samples (an operation).
+async fn start_validation(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    ApiJson(request): ApiJson<ValidationRequest>,
+) -> Result<HttpResponse, ApiError> {
+    if !(2..=MAX_VALIDATION_SAMPLES).contains(&request.samples) {
+        return Err(
+            crate::error::Error::invalid("samples", format!("must be between 2 and {MAX_VALIDATION_SAMPLES}")).into()
+        );
+    }
+    if state.store.metamodel_body(&id).await?.is_none() {
+        return Err(ApiError::not_found("metamodel", &id));
+    }
+    let queued = ValidationJob { metamodel_id: id, samples: request.samples, seed: request.seed };
+    let job = uuid::Uuid::new_v4().to_string();
+    state.store.insert_job(&job, "validation", &serde_json::to_string(&queued).expect("a job serialises")).await?;
+    state.wake.notify_one();
+    let row = state.store.job(&job).await?.ok_or_else(|| ApiError::internal("a queued job vanished"))?;
+    Ok((
+        StatusCode::ACCEPTED,
+        [(header::LOCATION, format!("/v1/operations/{job}")), (header::RETRY_AFTER, "2".to_string())],
+        Json(super::operations::operation(&row)),
+    )
+        .into_response())
 }

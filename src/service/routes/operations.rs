@@ -32,6 +32,7 @@ pub fn operation(row: &JobRow) -> Value {
         "progress": progress,
         "error": row.error,
         "metamodel_id": row.metamodel_id,
+        "result": row.result.as_deref().and_then(|r| serde_json::from_str::<Value>(r).ok()),
         "attempts": row.attempts,
         "created_at_ms": row.created_at,
         "started_at_ms": row.started_at,
