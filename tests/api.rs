@@ -213,6 +213,28 @@ async fn bad_input_is_refused_as_problem_json() {
     app.stop().await;
 }
 
+/// A retry under the same Idempotency-Key gets the same operation; another body under it is refused.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn idempotency_keys_replay_the_operation() {
+    let app = spawn_app(&database("idempotency")).await;
+    let url = format!("{}/v1/calibrations", app.address);
+    let body = json!({"experiments": 4, "duration_s": 10});
+    let send = |body: Value| app.client.post(&url).header("idempotency-key", "k-1").json(&body).send();
+    let first = send(body.clone()).await.unwrap();
+    assert_eq!(first.status().as_u16(), 202);
+    let first_location = first.headers()["location"].clone();
+    let again = send(body.clone()).await.unwrap();
+    assert_eq!(again.status().as_u16(), 202);
+    assert_eq!(again.headers()["location"], first_location);
+    let (s, ct, problem_body) = problem(send(json!({"experiments": 5, "duration_s": 10})).await.unwrap()).await;
+    assert_problem(s, &ct, &problem_body, 422, "Idempotency-Key");
+    let (_, list) = app.get("/v1/operations").await;
+    assert_eq!(list["operations"].as_array().unwrap().len(), 1);
+    let other = app.client.post(&url).header("idempotency-key", "k-2").json(&body).send().await.unwrap();
+    assert_ne!(other.headers()["location"], first_location);
+    app.stop().await;
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cancellation_stops_a_running_calibration() {
     let app = spawn_app(&database("cancel")).await;

@@ -96,15 +96,47 @@ impl Store {
         sqlx::query("SELECT 1").execute(&self.pool).await.is_ok()
     }
 
-    pub async fn insert_job(&self, id: &str, kind: &str, request: &str) -> Result<(), sqlx::Error> {
+    /// Queues a job. With an idempotency key (key, endpoint) the key is recorded in the same
+    /// transaction; if it was already used, nothing is queued and the earlier (operation id,
+    /// request) is returned instead.
+    pub async fn insert_job(
+        &self,
+        id: &str,
+        kind: &str,
+        request: &str,
+        idempotency: Option<(&str, &str)>,
+    ) -> Result<Option<(String, String)>, sqlx::Error> {
+        let mut tx = self.pool.begin().await?;
+        if let Some((key, endpoint)) = idempotency {
+            let earlier = sqlx::query(
+                "SELECT operation_id, request FROM idempotency WHERE idempotency_key = $1 AND endpoint = $2",
+            )
+            .bind(key)
+            .bind(endpoint)
+            .fetch_optional(&mut *tx)
+            .await?;
+            if let Some(row) = earlier {
+                tx.rollback().await?;
+                return Ok(Some((row.try_get("operation_id")?, row.try_get("request")?)));
+            }
+            sqlx::query("INSERT INTO idempotency (idempotency_key, endpoint, request, operation_id, created_at) VALUES ($1, $2, $3, $4, $5)")
+                .bind(key)
+                .bind(endpoint)
+                .bind(request)
+                .bind(id)
+                .bind(now_ms())
+                .execute(&mut *tx)
+                .await?;
+        }
         sqlx::query("INSERT INTO jobs (id, kind, state, request, created_at) VALUES ($1, $2, 'queued', $3, $4)")
             .bind(id)
             .bind(kind)
             .bind(request)
             .bind(now_ms())
-            .execute(&self.pool)
+            .execute(&mut *tx)
             .await?;
-        Ok(())
+        tx.commit().await?;
+        Ok(None)
     }
 
     /// Claims the oldest queued job, or a running one whose lease ran out (its worker died).

@@ -1,14 +1,13 @@
 //! Starting calibrations: checked at once, then queued as an operation.
 
-use super::ApiJson;
-use super::operations::operation;
+use super::{ApiJson, accept_job};
 use crate::service::error::ApiError;
 use crate::service::{AppState, CalibrationRequest};
+use axum::Router;
 use axum::extract::State;
-use axum::http::{StatusCode, header};
-use axum::response::IntoResponse;
+use axum::http::HeaderMap;
+use axum::response::Response;
 use axum::routing::post;
-use axum::{Json, Router};
 
 pub fn router() -> Router<AppState> {
     Router::new().route("/v1/calibrations", post(start))
@@ -17,17 +16,10 @@ pub fn router() -> Router<AppState> {
 /// 202 with the operation's `Location`; bad specs are refused now, not in the worker.
 async fn start(
     State(state): State<AppState>,
+    headers: HeaderMap,
     ApiJson(request): ApiJson<CalibrationRequest>,
-) -> Result<impl IntoResponse, ApiError> {
+) -> Result<Response, ApiError> {
     request.resolve(&state.config)?;
-    let id = uuid::Uuid::new_v4().to_string();
     let text = serde_json::to_string(&request).expect("a request serialises");
-    state.store.insert_job(&id, "calibration", &text).await?;
-    state.wake.notify_one();
-    let row = state.store.job(&id).await?.ok_or_else(|| ApiError::internal("a queued job vanished"))?;
-    Ok((
-        StatusCode::ACCEPTED,
-        [(header::LOCATION, format!("/v1/operations/{id}")), (header::RETRY_AFTER, "2".to_string())],
-        Json(operation(&row)),
-    ))
+    accept_job(&state, &headers, "calibrations", "calibration", text).await
 }

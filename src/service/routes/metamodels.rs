@@ -169,6 +169,7 @@ async fn exceedance(
 async fn start_validation(
     State(state): State<AppState>,
     Path(id): Path<String>,
+    headers: HeaderMap,
     ApiJson(request): ApiJson<ValidationRequest>,
 ) -> Result<HttpResponse, ApiError> {
     if !(2..=MAX_VALIDATION_SAMPLES).contains(&request.samples) {
@@ -180,14 +181,6 @@ async fn start_validation(
         return Err(ApiError::not_found("metamodel", &id));
     }
     let queued = ValidationJob { metamodel_id: id, samples: request.samples, seed: request.seed };
-    let job = uuid::Uuid::new_v4().to_string();
-    state.store.insert_job(&job, "validation", &serde_json::to_string(&queued).expect("a job serialises")).await?;
-    state.wake.notify_one();
-    let row = state.store.job(&job).await?.ok_or_else(|| ApiError::internal("a queued job vanished"))?;
-    Ok((
-        StatusCode::ACCEPTED,
-        [(header::LOCATION, format!("/v1/operations/{job}")), (header::RETRY_AFTER, "2".to_string())],
-        Json(super::operations::operation(&row)),
-    )
-        .into_response())
+    let text = serde_json::to_string(&queued).expect("a job serialises");
+    super::accept_job(&state, &headers, "validations", "validation", text).await
 }

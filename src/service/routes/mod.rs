@@ -81,3 +81,48 @@ impl Page {
         Ok(())
     }
 }
+
+/// Queues a job and answers 202 with its `Location`, honouring `Idempotency-Key`: a retry with the
+/// same body gets the same operation, a different body under the same key is refused (422).
+pub async fn accept_job(
+    state: &AppState,
+    headers: &axum::http::HeaderMap,
+    endpoint: &str,
+    kind: &str,
+    request: String,
+) -> Result<axum::response::Response, super::error::ApiError> {
+    use axum::http::{StatusCode, header};
+    use axum::response::IntoResponse;
+    let key = match headers.get("idempotency-key") {
+        None => None,
+        Some(v) => match v.to_str() {
+            Ok(k) if !k.is_empty() && k.len() <= 255 => Some(k.to_string()),
+            _ => {
+                return Err(crate::error::Error::invalid(
+                    "Idempotency-Key",
+                    "must be 1 to 255 visible ASCII characters",
+                )
+                .into());
+            }
+        },
+    };
+    let mut id = uuid::Uuid::new_v4().to_string();
+    let earlier = state.store.insert_job(&id, kind, &request, key.as_deref().map(|k| (k, endpoint))).await?;
+    if let Some((operation, stored)) = earlier {
+        if stored != request {
+            return Err(
+                crate::error::Error::invalid("Idempotency-Key", "was already used with a different request").into()
+            );
+        }
+        id = operation;
+    } else {
+        state.wake.notify_one();
+    }
+    let row = state.store.job(&id).await?.ok_or_else(|| super::error::ApiError::internal("a queued job vanished"))?;
+    Ok((
+        StatusCode::ACCEPTED,
+        [(header::LOCATION, format!("/v1/operations/{id}")), (header::RETRY_AFTER, "2".to_string())],
+        axum::Json(operations::operation(&row)),
+    )
+        .into_response())
+}
