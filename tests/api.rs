@@ -164,6 +164,13 @@ async fn calibrate_follow_fetch_and_sample() {
         problem(app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 1})).await).await;
     assert_problem(s, &ct, &body, 422, "samples");
 
+    let metrics = app.client.get(format!("{}/metrics", app.address)).send().await.unwrap().text().await.unwrap();
+    assert!(
+        metrics.contains("windmeta_http_requests_total") && metrics.contains("route=\"/v1/operations/{id}\""),
+        "{metrics}"
+    );
+    assert!(metrics.contains("windmeta_jobs_total"), "{metrics}");
+
     let deleted = app.client.delete(format!("{}/v1/metamodels/{id}", app.address)).send().await.unwrap();
     assert_eq!(deleted.status().as_u16(), 204);
     assert_eq!(app.get(&format!("/v1/metamodels/{id}")).await.0, 404);

@@ -156,5 +156,10 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
     if let Err(error) = outcome {
         tracing::error!(%error, job = %id, "recording the outcome failed");
     }
+    let state_name = match state.store.job(&id).await {
+        Ok(Some(row)) => row.state,
+        _ => "unknown".into(),
+    };
+    metrics::counter!("windmeta_jobs_total", "kind" => kind.to_string(), "outcome" => state_name).increment(1);
     tracing::info!(job = %id, "job ended");
 }

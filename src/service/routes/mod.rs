@@ -6,6 +6,7 @@ mod health;
 mod metamodels;
 mod operations;
 mod presets;
+mod telemetry;
 
 use super::AppState;
 use axum::Router;
@@ -23,7 +24,12 @@ pub fn router(state: AppState) -> Router {
         .merge(operations::router())
         .merge(metamodels::router())
         .layer(axum::middleware::from_fn_with_state(state.clone(), auth::require_api_key));
-    let mut app = Router::new().merge(health::router()).merge(api).with_state(state.clone());
+    let mut app = Router::new()
+        .merge(health::router())
+        .merge(telemetry::router())
+        .merge(api)
+        .route_layer(axum::middleware::from_fn(telemetry::track))
+        .with_state(state.clone());
     if !state.config.cors_origins.is_empty() {
         app = app.layer(auth::cors(&state.config.cors_origins));
     }

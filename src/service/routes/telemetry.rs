@@ -1,0 +1,40 @@
+//! Prometheus metrics: requests by matched route, method and status, their latency, and job
+//! outcomes. The recorder is process-wide, installed once.
+
+use crate::service::AppState;
+use axum::Router;
+use axum::extract::{MatchedPath, Request};
+use axum::http::header;
+use axum::middleware::Next;
+use axum::response::{IntoResponse, Response};
+use axum::routing::get;
+use metrics_exporter_prometheus::{PrometheusBuilder, PrometheusHandle};
+use std::sync::OnceLock;
+use std::time::Instant;
+
+fn handle() -> &'static PrometheusHandle {
+    static HANDLE: OnceLock<PrometheusHandle> = OnceLock::new();
+    HANDLE.get_or_init(|| PrometheusBuilder::new().install_recorder().expect("the metrics recorder installs once"))
+}
+
+pub fn router() -> Router<AppState> {
+    handle();
+    Router::new().route("/metrics", get(render))
+}
+
+async fn render() -> impl IntoResponse {
+    ([(header::CONTENT_TYPE, "text/plain; version=0.0.4")], handle().render())
+}
+
+/// Counts and times every request under its route pattern (not its raw path, which has ids).
+pub async fn track(request: Request, next: Next) -> Response {
+    let route = request.extensions().get::<MatchedPath>().map_or("unmatched".to_string(), |p| p.as_str().to_string());
+    let method = request.method().to_string();
+    let started = Instant::now();
+    let response = next.run(request).await;
+    let status = response.status().as_u16().to_string();
+    let labels = [("route", route), ("method", method), ("status", status)];
+    metrics::counter!("windmeta_http_requests_total", &labels).increment(1);
+    metrics::histogram!("windmeta_http_request_seconds", &labels).record(started.elapsed().as_secs_f64());
+    response
+}
