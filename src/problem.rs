@@ -8,7 +8,7 @@
 use crate::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::structure::{CustomStructure, Modes, Structure, frame40};
-use crate::uncertainty::{Input, InputModel, Marginal, Rng};
+use crate::uncertainty::{Input, InputModel, Marginal, Rng, rng_from_seed, stream_seed};
 use crate::wind::{ModalForces, StormGrid, WindLoads, WindSite};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -244,6 +244,20 @@ impl Problem {
                 Ok(self.wind.floor_forces(p.wind_speed, &self.storm, rng)?.project(self.modes.shapes.as_ref()))
             }
         }
+    }
+
+    /// Sample k of a run seeded with `seed`: its physical parameters and its storm's modal forces.
+    /// The storm depends only on (seed, k), whichever thread draws it and however many there are.
+    pub fn sample_storm(
+        &self,
+        x: &[f64],
+        path: WindPath,
+        seed: u64,
+        k: usize,
+    ) -> Result<(PhysicalParameters, ModalForces)> {
+        let p = self.parameters(x)?;
+        let forces = self.modal_forces(&p, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
+        Ok((p, forces))
     }
 
     /// One storm through the reference model. Full-order runs always use the floor field.

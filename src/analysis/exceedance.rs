@@ -5,7 +5,7 @@ use super::Response;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::{Metamodel, Observer, Progress};
-use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed, stream_seed};
+use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{Beta, ContinuousCDF};
@@ -118,8 +118,7 @@ pub fn metamodel_peaks(
             if observer.cancelled() {
                 return Err(Error::Cancelled);
             }
-            let p = problem.parameters(x)?;
-            let forces = problem.modal_forces(&p, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
+            let (_, forces) = problem.sample_storm(x, path, seed, k)?;
             let modal =
                 metamodel.predict(problem, x, &forces).map_err(|e| Error::Numerical(format!("sample {k}: {e}")))?;
             observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });

@@ -9,7 +9,7 @@ use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::narx::relative_error;
 use crate::surrogate::{Metamodel, Observer, Progress};
-use crate::uncertainty::{monte_carlo, rng_from_seed, stream_seed};
+use crate::uncertainty::{monte_carlo, rng_from_seed};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -84,8 +84,7 @@ pub fn validate(
             if observer.cancelled() {
                 return Err(Error::Cancelled);
             }
-            let p = problem.parameters(x)?;
-            let forces = problem.modal_forces(&p, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
+            let (p, forces) = problem.sample_storm(x, path, seed, k)?;
             let started = Instant::now();
             let reference = integrate_reduced(
                 &problem.sample_modes(&p),

@@ -12,7 +12,7 @@ use super::pce::{PceOptions, SparsePce};
 use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};
 use crate::problem::{Problem, WindPath};
-use crate::uncertainty::{latin_hypercube, rng_from_seed, stream_seed};
+use crate::uncertainty::{latin_hypercube, rng_from_seed};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -160,9 +160,7 @@ fn run_experiments(
         .enumerate()
         .map(|(k, x)| {
             check_cancel(observer)?;
-            let p = problem.parameters(x)?;
-            let mut rng = rng_from_seed(stream_seed(options.seed, k as u64));
-            let forces = problem.modal_forces(&p, options.wind, &mut rng)?;
+            let (p, forces) = problem.sample_storm(x, options.wind, options.seed, k)?;
             let dampers = problem.dampers(&p)?;
             let response = integrate_reduced(
                 &problem.sample_modes(&p),
