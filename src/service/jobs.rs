@@ -102,7 +102,7 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
     let work = match prepare(store, kind, &request, &state.config).await {
         Ok(work) => work,
         Err(error) => {
-            let _ = store.finish(&id, owner, "failed", Some(&error.to_string())).await;
+            let _ = store.finish(&id, owner, "failed", Some(&error.to_string()), None).await;
             return;
         }
     };
@@ -146,12 +146,14 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         }
         Ok(Ok((Output::Report(report), _))) => {
             let body = serde_json::to_string(&report).expect("a report serialises");
-            store.complete_with_result(&id, owner, &body).await.map(|_| ())
+            store.finish(&id, owner, "succeeded", None, Some(&body)).await.map(|_| ())
         }
         Ok(Err(Error::Cancelled)) if state.draining.load(Ordering::Relaxed) => store.release(&id, owner).await,
-        Ok(Err(Error::Cancelled)) => store.finish(&id, owner, "cancelled", None).await.map(|_| ()),
-        Ok(Err(error)) => store.finish(&id, owner, "failed", Some(&error.to_string())).await.map(|_| ()),
-        Err(panic) => store.finish(&id, owner, "failed", Some(&format!("the job panicked: {panic}"))).await.map(|_| ()),
+        Ok(Err(Error::Cancelled)) => store.finish(&id, owner, "cancelled", None, None).await.map(|_| ()),
+        Ok(Err(error)) => store.finish(&id, owner, "failed", Some(&error.to_string()), None).await.map(|_| ()),
+        Err(panic) => {
+            store.finish(&id, owner, "failed", Some(&format!("the job panicked: {panic}")), None).await.map(|_| ())
+        }
     };
     if let Err(error) = outcome {
         tracing::error!(%error, job = %id, "recording the outcome failed");

@@ -213,29 +213,23 @@ impl Store {
         Ok(true)
     }
 
-    /// Marks a report-producing job done with its result; false when the lease was lost.
-    pub async fn complete_with_result(&self, id: &str, owner: &str, result: &str) -> Result<bool, sqlx::Error> {
+    /// Ends a job (succeeded with a report as `result`, failed with an `error`, or cancelled) if
+    /// the lease is still ours; false when it was lost.
+    pub async fn finish(
+        &self,
+        id: &str,
+        owner: &str,
+        state: &str,
+        error: Option<&str>,
+        result: Option<&str>,
+    ) -> Result<bool, sqlx::Error> {
         let done = sqlx::query(
-            "UPDATE jobs SET state = 'succeeded', result = $1, finished_at = $2, lease_owner = NULL \
-             WHERE id = $3 AND lease_owner = $4 AND state = 'running'",
-        )
-        .bind(result)
-        .bind(now_ms())
-        .bind(id)
-        .bind(owner)
-        .execute(&self.pool)
-        .await?;
-        Ok(done.rows_affected() == 1)
-    }
-
-    /// Ends a job as failed or cancelled (if the lease is still ours).
-    pub async fn finish(&self, id: &str, owner: &str, state: &str, error: Option<&str>) -> Result<bool, sqlx::Error> {
-        let done = sqlx::query(
-            "UPDATE jobs SET state = $1, error = $2, finished_at = $3, lease_owner = NULL \
-             WHERE id = $4 AND lease_owner = $5 AND state = 'running'",
+            "UPDATE jobs SET state = $1, error = $2, result = $3, finished_at = $4, lease_owner = NULL \
+             WHERE id = $5 AND lease_owner = $6 AND state = 'running'",
         )
         .bind(state)
         .bind(error)
+        .bind(result)
         .bind(now_ms())
         .bind(id)
         .bind(owner)
