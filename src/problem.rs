@@ -20,7 +20,7 @@ pub const PRESETS: [&str; 2] = ["frame40", "frame40-kn"];
 
 /// A study as it arrives from a file or a request; every field is optional, with the paper's values
 /// as defaults.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ProblemSpec {
     /// A preset name; ignored for the structure when `structure` is given.
@@ -51,7 +51,7 @@ pub struct PhysicalParameters {
 }
 
 /// How the wind of a reference run is generated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum WindPath {
     /// Every floor's speed, then Q = Φᵀ f.
@@ -61,7 +61,7 @@ pub enum WindPath {
 }
 
 /// Which reference model integrates the storm.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Order {
     Reduced,

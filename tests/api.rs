@@ -26,17 +26,29 @@ async fn spawn_app(db: &std::path::Path) -> TestApp {
 }
 
 async fn spawn_app_with(db: &std::path::Path, api_keys: Vec<String>, cors_origins: Vec<String>) -> TestApp {
-    let args = ServeArgs {
-        api_keys,
-        cors_origins,
+    spawn_app_configured(db, |args| {
+        args.api_keys = api_keys;
+        args.cors_origins = cors_origins;
+    })
+    .await
+}
+
+/// Small limits so that tests can reach them; `adjust` changes what a test needs.
+async fn spawn_app_configured(db: &std::path::Path, adjust: impl FnOnce(&mut ServeArgs)) -> TestApp {
+    let mut args = ServeArgs {
+        api_keys: vec![],
+        cors_origins: vec![],
         listen: "127.0.0.1:0".into(),
         database_url: format!("sqlite://{}", db.display()),
         workers: 1,
         max_body_bytes: 64 * 1024,
         max_samples: 2000,
+        max_sync_samples: 2000,
+        max_queued_jobs: 100,
         max_experiments: 400,
         lease_ms: 2_000,
     };
+    adjust(&mut args);
     let app = Application::build(args).await.expect("the app builds");
     let address = format!("http://{}", app.local_addr());
     let (stop, stopped) = oneshot::channel::<()>();
@@ -46,15 +58,42 @@ async fn spawn_app_with(db: &std::path::Path, api_keys: Vec<String>, cors_origin
     TestApp { address, client: reqwest::Client::new(), stop: Some(stop), server }
 }
 
+/// Fails unless the API description documents `status` for the operation `path` resolves to: every
+/// answer the tests see through `get` and `post` is checked, so an undocumented status cannot hide.
+fn assert_documented(method: &str, path: &str, status: u16) {
+    static SPEC: std::sync::OnceLock<Value> = std::sync::OnceLock::new();
+    let spec = SPEC.get_or_init(|| serde_json::to_value(windmeta::service::openapi()).unwrap());
+    let path = path.split('?').next().unwrap();
+    let segments: Vec<&str> = path.split('/').collect();
+    let (template, item) = spec["paths"]
+        .as_object()
+        .unwrap()
+        .iter()
+        .find(|(template, _)| {
+            let parts: Vec<&str> = template.split('/').collect();
+            parts.len() == segments.len()
+                && parts.iter().zip(&segments).all(|(t, s)| t == s || (t.starts_with('{') && t.ends_with('}')))
+        })
+        .unwrap_or_else(|| panic!("{path} is not a documented path"));
+    let responses = &item[method.to_lowercase()]["responses"];
+    assert!(
+        responses.get(status.to_string()).is_some(),
+        "{method} {template} answered {status}, which is not documented"
+    );
+}
+
 impl TestApp {
     async fn get(&self, path: &str) -> (u16, Value) {
         let r = self.client.get(format!("{}{path}", self.address)).send().await.unwrap();
         let status = r.status().as_u16();
+        assert_documented("GET", path, status);
         (status, r.json().await.unwrap_or(Value::Null))
     }
 
     async fn post(&self, path: &str, body: Value) -> reqwest::Response {
-        self.client.post(format!("{}{path}", self.address)).json(&body).send().await.unwrap()
+        let r = self.client.post(format!("{}{path}", self.address)).json(&body).send().await.unwrap();
+        assert_documented("POST", path, r.status().as_u16());
+        r
     }
 
     async fn wait_for(&self, id: &str, states: &[&str], limit: Duration) -> Value {
@@ -147,6 +186,20 @@ async fn calibrate_follow_fetch_and_sample() {
         .await
         .unwrap();
     assert!(svg.text().await.unwrap().starts_with("<svg"));
+    // The same request as an operation (what larger requests become).
+    let queued = app
+        .client
+        .post(format!("{}{path}", app.address))
+        .header("prefer", "respond-async")
+        .json(&json!({"samples": 30, "seed": 2, "fixed": {"wind_speed": 32}}))
+        .send()
+        .await
+        .unwrap();
+    assert_eq!(queued.status().as_u16(), 202);
+    let queued: Value = queued.json().await.unwrap();
+    let done = app.wait_for(queued["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(60)).await;
+    assert_eq!(done["kind"], "exceedance");
+    assert_eq!(done["result"]["probabilities"], curve["probabilities"], "the operation's curve is the same");
 
     // A validation job against the reference on fresh samples.
     let response = app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 4, "seed": 9})).await;
@@ -318,5 +371,214 @@ async fn api_keys_and_cors() {
         .await
         .unwrap();
     assert!(exposed.headers()["access-control-expose-headers"].to_str().unwrap().contains("location"));
+    app.stop().await;
+}
+
+/// The (method, path template, status) triples the API description documents.
+fn documented_statuses(spec: &Value) -> Vec<(String, String, u16)> {
+    let mut out = Vec::new();
+    for (path, item) in spec["paths"].as_object().unwrap() {
+        for (method, operation) in item.as_object().unwrap() {
+            for status in operation["responses"].as_object().unwrap().keys() {
+                out.push((method.to_uppercase(), path.clone(), status.parse().unwrap()));
+            }
+        }
+    }
+    out
+}
+
+/// The documented response, following a `$ref` to a shared one.
+fn documented_response<'a>(spec: &'a Value, method: &str, path: &str, status: u16) -> &'a Value {
+    let response = &spec["paths"][path][method.to_lowercase()]["responses"][status.to_string()];
+    match response["$ref"].as_str() {
+        Some(reference) => &spec["components"]["responses"][reference.rsplit('/').next().unwrap()],
+        None => response,
+    }
+}
+
+fn keys(value: &Value) -> Vec<String> {
+    value.as_object().map(|o| o.keys().cloned().collect()).unwrap_or_default()
+}
+
+/// When the server has to be in a particular state for a status to be reachable.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Phase {
+    Normal,
+    QueueFull,
+    DatabaseBroken,
+}
+
+fn phase_of(path: &str, status: u16) -> Phase {
+    match status {
+        500 => Phase::DatabaseBroken,
+        503 if path == "/readyz" => Phase::DatabaseBroken,
+        503 => Phase::QueueFull,
+        _ => Phase::Normal,
+    }
+}
+
+const KEY: &str = "contract-key";
+
+struct Ids {
+    metamodel: String,
+    doomed_metamodel: String,
+    operation: String,
+}
+
+/// Sends the request that should make `method path` answer `status`.
+async fn provoke(app: &TestApp, ids: &Ids, method: &str, template: &str, status: u16) -> reqwest::Response {
+    let id = match (template, status) {
+        (_, 404) => "missing",
+        (t, _) if t.starts_with("/v1/presets/") => "frame40",
+        (t, 204) if t.starts_with("/v1/metamodels/") => &ids.doomed_metamodel,
+        (t, _) if t.starts_with("/v1/metamodels/") => &ids.metamodel,
+        _ => &ids.operation,
+    };
+    let path = template.replace("{id}", id).replace("{name}", id);
+    let has_body = method == "POST" && !path.ends_with("/cancel");
+    let valid_body = match template {
+        "/v1/calibrations" => json!({"experiments": 4, "duration_s": 10}),
+        "/v1/metamodels/{id}/exceedance" => json!({"samples": 10}),
+        "/v1/metamodels/{id}/validations" => json!({"samples": 2}),
+        _ => json!({}),
+    };
+    let invalid_body = match template {
+        "/v1/calibrations" => json!({"experiments": 2}),
+        "/v1/metamodels/{id}/exceedance" => json!({"samples": 0}),
+        _ => json!({"samples": 1}),
+    };
+    let url = |query: &str| format!("{}{path}{query}", app.address);
+    let request = |query: &str| {
+        app.client.request(reqwest::Method::from_bytes(method.as_bytes()).unwrap(), url(query)).bearer_auth(KEY)
+    };
+    let request = match status {
+        401 => app.client.request(reqwest::Method::from_bytes(method.as_bytes()).unwrap(), url("")).json(&valid_body),
+        400 if has_body => request("").header("content-type", "application/json").body("{not json"),
+        400 => request("?limit=many"),
+        413 => request("").json(&json!({"seed": 1, "padding": "x".repeat(70 * 1024)})),
+        415 => request("").header("content-type", "text/plain").body(valid_body.to_string()),
+        422 if has_body => request("").json(&invalid_body),
+        422 => request("?limit=0"),
+        202 | 500 | 503 if template.ends_with("/exceedance") => {
+            request("").header("prefer", "respond-async").json(&valid_body)
+        }
+        _ if has_body => request("").json(&valid_body),
+        _ => request(""),
+    };
+    request.send().await.unwrap()
+}
+
+/// Waits until no operation is queued or running, cancelling what is.
+async fn drain_operations(app: &TestApp) {
+    let list =
+        |app: &TestApp| app.client.get(format!("{}/v1/operations?limit=500", app.address)).bearer_auth(KEY).send();
+    for _ in 0..300 {
+        let operations: Value = list(app).await.unwrap().json().await.unwrap();
+        let open: Vec<String> = operations["operations"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .filter(|o| o["done"] == false)
+            .map(|o| o["id"].as_str().unwrap().to_string())
+            .collect();
+        if open.is_empty() {
+            return;
+        }
+        for id in open {
+            let url = format!("{}/v1/operations/{id}/cancel", app.address);
+            app.client.post(url).bearer_auth(KEY).send().await.unwrap();
+        }
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    panic!("operations did not stop");
+}
+
+async fn calibrate(app: &TestApp, body: Value) -> (String, String) {
+    let url = format!("{}/v1/calibrations", app.address);
+    let op: Value = app.client.post(url).bearer_auth(KEY).json(&body).send().await.unwrap().json().await.unwrap();
+    let id = op["id"].as_str().unwrap().to_string();
+    let url = format!("{}/v1/operations/{id}", app.address);
+    for _ in 0..600 {
+        let op: Value = app.client.get(&url).bearer_auth(KEY).send().await.unwrap().json().await.unwrap();
+        if op["done"] == true {
+            assert_eq!(op["state"], "succeeded", "{op}");
+            return (id, op["metamodel_id"].as_str().unwrap().to_string());
+        }
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    panic!("the calibration did not finish");
+}
+
+/// Every status the API description documents for an operation is one the server really returns:
+/// each is provoked over HTTP (with the server in the state that allows it: a full queue, a broken
+/// database) and the answer's status and media type are checked against the description.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn every_documented_status_is_real() {
+    let db = database("contract");
+    let app = spawn_app_configured(&db, |args| {
+        args.api_keys = vec![KEY.into()];
+        args.max_queued_jobs = 1;
+    })
+    .await;
+    let spec: Value =
+        app.client.get(format!("{}/openapi.json", app.address)).send().await.unwrap().json().await.unwrap();
+    assert_eq!(spec, serde_json::to_value(windmeta::service::openapi()).unwrap(), "/openapi.json is the contract");
+    let (operation, metamodel) = calibrate(&app, json!({"experiments": 8, "duration_s": 30, "seed": 3})).await;
+    let (_, doomed_metamodel) = calibrate(&app, json!({"experiments": 4, "duration_s": 10})).await;
+    let ids = Ids { metamodel, doomed_metamodel, operation };
+    let documented = documented_statuses(&spec);
+    eprintln!("provoking {} documented (operation, status) pairs", documented.len());
+    for phase in [Phase::Normal, Phase::QueueFull, Phase::DatabaseBroken] {
+        match phase {
+            Phase::Normal => {}
+            Phase::QueueFull => {
+                drain_operations(&app).await;
+                // One long calibration runs on the single worker, the next waits: the queue is full.
+                let url = format!("{}/v1/calibrations", app.address);
+                let mut full = false;
+                for _ in 0..20 {
+                    let r = app.client.post(&url).bearer_auth(KEY).json(&json!({"experiments": 200})).send().await;
+                    full = r.unwrap().status() == 503;
+                    if full {
+                        break;
+                    }
+                    tokio::time::sleep(Duration::from_millis(300)).await;
+                }
+                assert!(full, "the queue never filled");
+            }
+            Phase::DatabaseBroken => {
+                drain_operations(&app).await;
+                let pool = sqlx::SqlitePool::connect(&format!("sqlite://{}", db.display())).await.unwrap();
+                for statement in
+                    ["ALTER TABLE jobs RENAME TO jobs_moved", "ALTER TABLE metamodels RENAME TO metamodels_moved"]
+                {
+                    sqlx::query(statement).execute(&pool).await.unwrap();
+                }
+            }
+        }
+        let provoked = documented.iter().filter(|(_, p, s)| phase_of(p, *s) == phase);
+        for (method, path, status) in provoked {
+            if *status == 202 {
+                drain_operations(&app).await; // the queue holds one job in this test
+            }
+            let response = provoke(&app, &ids, method, path, *status).await;
+            let documented_response = documented_response(&spec, method, path, *status);
+            for header in keys(&documented_response["headers"]) {
+                assert!(response.headers().contains_key(header.as_str()), "{method} {path} {status}: no {header}");
+            }
+            let got = response.status().as_u16();
+            let media = response.headers().get("content-type").map(|v| v.to_str().unwrap().to_string());
+            let body = response.text().await.unwrap_or_default();
+            assert_eq!(got, *status, "{method} {path} answered {got}, not the documented {status}: {body}");
+            let documented_media = keys(&documented_response["content"]);
+            match media {
+                None => assert!(documented_media.is_empty(), "{method} {path} {status}: no content type"),
+                Some(media) => assert!(
+                    documented_media.iter().any(|d| media.starts_with(d.as_str())),
+                    "{method} {path} {status}: `{media}` is not among {documented_media:?}"
+                ),
+            }
+        }
+    }
     app.stop().await;
 }

@@ -19,6 +19,13 @@ pub struct ServeArgs {
     /// Most samples an exceedance request may ask for.
     #[arg(long, env = "WINDMETA_MAX_SAMPLES", default_value_t = 20_000)]
     pub max_samples: usize,
+    /// Exceedance requests up to this many samples are answered at once; larger ones (and any
+    /// with `Prefer: respond-async`) run as operations.
+    #[arg(long, env = "WINDMETA_MAX_SYNC_SAMPLES", default_value_t = 2_000)]
+    pub max_sync_samples: usize,
+    /// Jobs that may wait in the queue; beyond, new work is refused with 503 and `Retry-After`.
+    #[arg(long, env = "WINDMETA_MAX_QUEUED_JOBS", default_value_t = 100)]
+    pub max_queued_jobs: usize,
     /// Most experiments a calibration may ask for.
     #[arg(long, env = "WINDMETA_MAX_EXPERIMENTS", default_value_t = 1000)]
     pub max_experiments: usize,

@@ -3,7 +3,7 @@
 
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use serde_json::json;
+use serde::{Deserialize, Serialize};
 
 #[derive(Debug)]
 pub struct ApiError {
@@ -11,15 +11,25 @@ pub struct ApiError {
     pub title: &'static str,
     pub detail: String,
     pub field: Option<String>,
+    /// Seconds after which a retry may succeed (sent as `Retry-After`).
+    pub retry_after: Option<u64>,
 }
 
 impl ApiError {
     pub fn new(status: StatusCode, title: &'static str, detail: impl Into<String>) -> Self {
-        ApiError { status, title, detail: detail.into(), field: None }
+        ApiError { status, title, detail: detail.into(), field: None, retry_after: None }
     }
 
     pub fn not_found(what: &str, id: &str) -> Self {
         ApiError::new(StatusCode::NOT_FOUND, "Not found", format!("no {what} with id `{id}`"))
+    }
+
+    /// The server cannot take the request now (full queue); the client should retry later.
+    pub fn unavailable(detail: impl Into<String>, retry_after_s: u64) -> Self {
+        ApiError {
+            retry_after: Some(retry_after_s),
+            ..ApiError::new(StatusCode::SERVICE_UNAVAILABLE, "Unavailable", detail)
+        }
     }
 
     pub fn internal(error: impl std::fmt::Display) -> Self {
@@ -36,6 +46,7 @@ impl From<crate::error::Error> for ApiError {
                 title: "Invalid request",
                 detail: format!("{field}: {reason}"),
                 field: Some(field),
+                retry_after: None,
             },
             crate::error::Error::Numerical(message) => {
                 ApiError::new(StatusCode::UNPROCESSABLE_ENTITY, "Numerical failure", message)
@@ -59,17 +70,43 @@ impl From<axum::extract::rejection::JsonRejection> for ApiError {
     }
 }
 
+/// An error as sent: RFC 9457 problem details (`application/problem+json`).
+#[derive(Debug, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct ProblemDetails {
+    /// Always `about:blank`: the status and title say what happened.
+    #[serde(rename = "type")]
+    pub kind: String,
+    pub title: String,
+    pub status: u16,
+    /// What was wrong, for a person.
+    pub detail: String,
+    /// The fields at fault, when the request was well-formed but not acceptable.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub errors: Vec<FieldError>,
+}
+
+/// One field at fault, named as in the request (`inputs.wind_speed`, `samples`, …).
+#[derive(Debug, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct FieldError {
+    pub field: String,
+    pub detail: String,
+}
+
 impl IntoResponse for ApiError {
     fn into_response(self) -> Response {
-        let mut body = json!({
-            "type": "about:blank",
-            "title": self.title,
-            "status": self.status.as_u16(),
-            "detail": self.detail,
-        });
-        if let Some(field) = &self.field {
-            body["errors"] = json!([{ "field": field, "detail": self.detail }]);
+        let errors = self.field.map(|field| FieldError { field, detail: self.detail.clone() }).into_iter().collect();
+        let body = ProblemDetails {
+            kind: "about:blank".into(),
+            title: self.title.into(),
+            status: self.status.as_u16(),
+            detail: self.detail,
+            errors,
+        };
+        let text = serde_json::to_string(&body).expect("problem details serialise");
+        let mut response = (self.status, [(header::CONTENT_TYPE, "application/problem+json")], text).into_response();
+        if let Some(seconds) = self.retry_after {
+            response.headers_mut().insert(header::RETRY_AFTER, seconds.into());
         }
-        (self.status, [(header::CONTENT_TYPE, "application/problem+json")], body.to_string()).into_response()
+        response
     }
 }

@@ -4,6 +4,7 @@
 //! report) with the job's completion, guarded by the lease. A worker that dies loses its lease and
 //! the job is taken up again.
 
+use super::exceedance::{ExceedanceAnswer, ExceedanceJob};
 use super::store::Store;
 use super::{AppState, CalibrationRequest, ValidationJob};
 use crate::analysis::{ValidationReport, validate};
@@ -64,12 +65,26 @@ async fn worker(state: AppState) {
 enum Work {
     Calibration(Box<Problem>, CalibrationOptions),
     Validation(Box<(Metamodel, Problem)>, usize, u64),
+    Exceedance(Box<(Metamodel, Problem)>, Box<ExceedanceJob>),
 }
 
 /// What it produced.
 enum Output {
     Metamodel(Box<Metamodel>),
     Report(Box<ValidationReport>),
+    Curve(Box<ExceedanceAnswer>),
+}
+
+/// A stored metamodel and its study, for jobs that sample it.
+async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Problem)> {
+    let body = store
+        .metamodel_body(id)
+        .await
+        .map_err(|e| Error::Numerical(format!("database: {e}")))?
+        .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
+    let metamodel = Metamodel::from_json(&body)?;
+    let problem = metamodel.problem()?;
+    Ok((metamodel, problem))
 }
 
 /// Reads a job's request into its work; the metamodel of a validation comes from the store.
@@ -84,14 +99,14 @@ async fn prepare(store: &Store, kind: &str, request: &str, config: &super::Serve
         "validation" => {
             let request: ValidationJob =
                 serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))?;
-            let body = store
-                .metamodel_body(&request.metamodel_id)
-                .await
-                .map_err(|e| Error::Numerical(format!("database: {e}")))?
-                .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
-            let metamodel = Metamodel::from_json(&body)?;
-            let problem = metamodel.problem()?;
-            Ok(Work::Validation(Box::new((metamodel, problem)), request.samples, request.seed))
+            let loaded = stored_metamodel(store, &request.metamodel_id).await?;
+            Ok(Work::Validation(Box::new(loaded), request.samples, request.seed))
+        }
+        "exceedance" => {
+            let job: ExceedanceJob =
+                serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))?;
+            let loaded = stored_metamodel(store, &job.metamodel_id).await?;
+            Ok(Work::Exceedance(Box::new(loaded), Box::new(job)))
         }
         other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
     }
@@ -118,6 +133,12 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
             let (metamodel, problem) = *loaded;
             validate(&metamodel, &problem, samples, seed, observer.as_ref())
                 .map(|r| (Output::Report(Box::new(r)), problem.name))
+        }
+        Work::Exceedance(loaded, job) => {
+            let (metamodel, problem) = *loaded;
+            job.request
+                .answer(&metamodel, &problem, &job.metamodel_id, observer.as_ref())
+                .map(|a| (Output::Curve(Box::new(a)), problem.name))
         }
     });
     let mut ticker = tokio::time::interval(Duration::from_secs(1));
@@ -146,6 +167,10 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         }
         Ok(Ok((Output::Report(report), _))) => {
             let body = serde_json::to_string(&report).expect("a report serialises");
+            store.finish(&id, owner, "succeeded", None, Some(&body)).await.map(|_| ())
+        }
+        Ok(Ok((Output::Curve(curve), _))) => {
+            let body = serde_json::to_string(&curve).expect("a curve serialises");
             store.finish(&id, owner, "succeeded", None, Some(&body)).await.map(|_| ())
         }
         Ok(Err(Error::Cancelled)) if state.draining.load(Ordering::Relaxed) => store.release(&id, owner).await,

@@ -3,11 +3,13 @@
 
 mod config;
 mod error;
+mod exceedance;
 mod jobs;
 mod routes;
 mod store;
 
 pub use config::ServeArgs;
+pub use routes::openapi;
 
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
@@ -41,17 +43,29 @@ pub struct AppState {
 }
 
 /// `POST /v1/calibrations`: every field optional, the paper's values by default.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct CalibrationRequest {
+    /// A built-in study (`GET /v1/presets`); `frame40-kn` when neither this nor `structure` is given.
+    #[schema(example = "frame40-kn")]
     pub preset: Option<String>,
+    /// A structure of your own instead of a preset.
     pub structure: Option<CustomStructure>,
+    /// Marginals replacing the preset's, by input name (`youngs_modulus`, `mass_factor`,
+    /// `damping_ratio`, `damper_c1` … `damper_c4`, `wind_speed`).
     pub inputs: BTreeMap<String, Marginal>,
     pub wind: Option<WindSite>,
+    /// Exponent α of the nonlinear viscous dampers, F = c·|v|^α·sign(v).
     pub damper_exponent: Option<f64>,
+    /// Modes kept in the reduced model (3 in the paper).
+    #[schema(minimum = 1)]
     pub modes: Option<usize>,
+    /// Storm length (s); 900 in the paper.
     pub duration_s: Option<f64>,
+    /// Time step (s); 0.01 in the paper.
     pub time_step_s: Option<f64>,
+    /// Reference runs on the Latin hypercube (K; 200 in the paper).
+    #[schema(minimum = 4)]
     pub experiments: Option<usize>,
     pub seed: Option<u64>,
     pub narx: Option<crate::surrogate::narx::NarxOptions>,
@@ -96,10 +110,13 @@ impl CalibrationRequest {
 }
 
 /// `POST /v1/metamodels/{id}/validations`: fresh samples through the reference and the metamodel.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ValidationRequest {
+    /// Fresh Monte Carlo samples, each one reference storm.
+    #[schema(minimum = 2, maximum = 5000, default = 200)]
     pub samples: usize,
+    #[schema(default = 1000)]
     pub seed: u64,
 }
 

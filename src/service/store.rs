@@ -27,6 +27,19 @@ pub struct JobRow {
     pub finished_at: Option<i64>,
 }
 
+/// What became of a job offered to the queue.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Enqueued {
+    New,
+    /// The idempotency key was used before, for this operation and request.
+    Earlier {
+        id: String,
+        request: String,
+    },
+    /// Too many jobs wait already.
+    QueueFull,
+}
+
 /// A stored metamodel's summary.
 #[derive(Debug, Clone)]
 pub struct MetamodelRow {
@@ -92,20 +105,25 @@ impl Store {
         Ok(Store { pool })
     }
 
+    /// Whether the database answers with the tables the service needs (a live connection to a
+    /// database whose schema is gone is not ready).
     pub async fn ping(&self) -> bool {
-        sqlx::query("SELECT 1").execute(&self.pool).await.is_ok()
+        let jobs = sqlx::query("SELECT id FROM jobs LIMIT 1").fetch_optional(&self.pool).await;
+        let metamodels = sqlx::query("SELECT id FROM metamodels LIMIT 1").fetch_optional(&self.pool).await;
+        jobs.is_ok() && metamodels.is_ok()
     }
 
-    /// Queues a job. With an idempotency key (key, endpoint) the key is recorded in the same
-    /// transaction; if it was already used, nothing is queued and the earlier (operation id,
-    /// request) is returned instead.
+    /// Queues a job unless `max_queued` jobs already wait. With an idempotency key (key, endpoint)
+    /// the key is recorded in the same transaction; if it was already used, nothing is queued and
+    /// the earlier operation is returned instead (even when the queue is full).
     pub async fn insert_job(
         &self,
         id: &str,
         kind: &str,
         request: &str,
         idempotency: Option<(&str, &str)>,
-    ) -> Result<Option<(String, String)>, sqlx::Error> {
+        max_queued: i64,
+    ) -> Result<Enqueued, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
         if let Some((key, endpoint)) = idempotency {
             let earlier = sqlx::query(
@@ -117,8 +135,18 @@ impl Store {
             .await?;
             if let Some(row) = earlier {
                 tx.rollback().await?;
-                return Ok(Some((row.try_get("operation_id")?, row.try_get("request")?)));
+                return Ok(Enqueued::Earlier { id: row.try_get("operation_id")?, request: row.try_get("request")? });
             }
+        }
+        let queued: i64 = sqlx::query("SELECT COUNT(*) AS n FROM jobs WHERE state = 'queued'")
+            .fetch_one(&mut *tx)
+            .await?
+            .try_get("n")?;
+        if queued >= max_queued {
+            tx.rollback().await?;
+            return Ok(Enqueued::QueueFull);
+        }
+        if let Some((key, endpoint)) = idempotency {
             sqlx::query("INSERT INTO idempotency (idempotency_key, endpoint, request, operation_id, created_at) VALUES ($1, $2, $3, $4, $5)")
                 .bind(key)
                 .bind(endpoint)
@@ -136,7 +164,7 @@ impl Store {
             .execute(&mut *tx)
             .await?;
         tx.commit().await?;
-        Ok(None)
+        Ok(Enqueued::New)
     }
 
     /// Claims the oldest queued job, or a running one whose lease ran out (its worker died).

@@ -6,7 +6,7 @@ use faer::Mat;
 use serde::{Deserialize, Serialize};
 
 /// A damper of a custom layout, in the terms a user writes down.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CustomDamper {
     /// Upper floor of the damper (1-based); it joins this floor to the one below (or the ground).
@@ -18,7 +18,7 @@ pub struct CustomDamper {
 }
 
 /// A custom structure as it arrives in a file or a request body.
-#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CustomStructure {
     /// Mass matrix (kg), one row per floor from the ground up.

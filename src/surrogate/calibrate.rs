@@ -20,7 +20,7 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 /// Everything about a calibration that is not the study itself; the defaults are the paper's.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct CalibrationOptions {
     /// Experiments K of the Latin-hypercube design.
@@ -72,7 +72,7 @@ impl CalibrationOptions {
 }
 
 /// Where a calibration is; reported to an observer as it goes.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(tag = "stage", rename_all = "snake_case")]
 pub enum Progress {
     Experiments {
@@ -113,7 +113,7 @@ impl Observer for Silent {
 }
 
 /// What the calibration measured about one mode.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct ModeDiagnostics {
     pub mode: usize,
     pub selected_terms: Vec<String>,

@@ -123,7 +123,7 @@ pub fn simulation_error(terms: &[NarxTerm], theta: &[f64], record: &Record) -> f
 }
 
 /// The structure chosen for one mode, and how it was chosen.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct StructureChoice {
     pub terms: Vec<NarxTerm>,
     /// Mean free-run relative error of the one-step fits of the chosen structure.
@@ -201,7 +201,7 @@ pub fn select_structure(
 }
 
 /// How the coefficients are refined on the simulation error.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Refinement {
     /// Levenberg-Marquardt with forward sensitivities of the recursion.

@@ -14,7 +14,7 @@ pub const FORMAT: &str = "windmeta-pc-narx";
 pub const FORMAT_VERSION: u32 = 1;
 
 /// The PC-NARX model of one modal coordinate.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct ModeModel {
     /// Selected NARX terms, in the order of `coefficients`.
     pub terms: Vec<NarxTerm>,
@@ -33,7 +33,7 @@ pub struct ModeModel {
 }
 
 /// How the static modal displacement of a sample is predicted.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct StaticResponse {
     /// When true the expansion is of the static gain y_static / Q̄ (m/N), multiplied by the
     /// sample's own mean modal force, which carries the wind speed exactly; when false (some
@@ -50,7 +50,7 @@ impl StaticResponse {
 }
 
 /// Roof-normalised modes the metamodel was calibrated on (shapes fixed across samples).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct ModalBasis {
     pub frequencies_rad_s: Vec<f64>,
     pub modal_masses_kg: Vec<f64>,
@@ -59,7 +59,7 @@ pub struct ModalBasis {
 }
 
 /// How the metamodel came about and how well it fits its own experiments.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct CalibrationSummary {
     pub options: CalibrationOptions,
     pub modes: Vec<ModeDiagnostics>,
@@ -71,7 +71,7 @@ pub struct CalibrationSummary {
     pub seconds: StageSeconds,
 }
 
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct StageSeconds {
     pub experiments: f64,
     pub structure: f64,
@@ -81,7 +81,7 @@ pub struct StageSeconds {
 }
 
 /// A calibrated PC-NARX metamodel.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct Metamodel {
     pub format: String,
     pub version: u32,

@@ -12,7 +12,7 @@ use std::fmt;
 /// One candidate term y(t − output_lag)^output_power · Q(t − input_lag)^input_power (Eq. 18); all
 /// powers zero is the constant. With `output_mode` set, the output factor is another mode's
 /// displacement: the dampers couple the modes, which a single-input model cannot see.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct NarxTerm {
     pub output_lag: usize,
     pub output_power: u32,
@@ -94,7 +94,7 @@ impl fmt::Display for NarxTerm {
 
 /// The full NARX model to select from. The defaults are the paper's: l₁ + l₂ ≤ 3, l₂ ≤ 1,
 /// n_y = 1, 2 and n_Q = 0, 1, 2, without cross products: 10 candidates.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct NarxOptions {
     /// Largest total degree l₁ + l₂ of a term.

@@ -13,7 +13,7 @@ use crate::uncertainty::{InputModel, StandardSpace};
 use serde::{Deserialize, Serialize};
 
 /// Options of the sparse expansion; the defaults are the paper's (q = 1, interaction rank 2).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct PceOptions {
     /// Largest total degree tried.
@@ -56,11 +56,12 @@ impl PceOptions {
 pub type Term = Vec<(usize, usize)>;
 
 /// A fitted sparse expansion.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct SparsePce {
     /// Polynomial family of each input (by the input model's order); `fixed` inputs take no part.
     pub families: Vec<StandardSpace>,
-    /// The retained terms; the empty term is the constant.
+    /// The retained terms, each a list of [input index, degree] pairs; the empty term is the constant.
+    #[schema(value_type = Vec<Vec<Vec<u64>>>)]
     pub terms: Vec<Term>,
     pub coefficients: Vec<f64>,
     /// Total degree of the candidate basis the terms were chosen from.

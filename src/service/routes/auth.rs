@@ -13,10 +13,11 @@ fn constant_time_eq(a: &[u8], b: &[u8]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
 }
 
-/// With keys configured, a request needs `Authorization: Bearer <key>`; health stays open.
+/// With keys configured, a request to /v1 needs `Authorization: Bearer <key>`; health, metrics and
+/// the API description stay open.
 pub async fn require_api_key(State(state): State<AppState>, request: Request, next: Next) -> Response {
     let keys = &state.config.api_keys;
-    if keys.is_empty() {
+    if keys.is_empty() || !request.uri().path().starts_with("/v1/") {
         return next.run(request).await;
     }
     let presented = request

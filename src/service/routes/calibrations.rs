@@ -1,25 +1,37 @@
 //! Starting calibrations: checked at once, then queued as an operation.
 
 use super::{ApiJson, accept_job};
-use crate::service::error::ApiError;
+use crate::service::error::{ApiError, ProblemDetails};
+use crate::service::routes::operations::{Operation, OperationKind};
 use crate::service::{AppState, CalibrationRequest};
-use axum::Router;
 use axum::extract::State;
 use axum::http::HeaderMap;
 use axum::response::Response;
-use axum::routing::post;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
 
-pub fn router() -> Router<AppState> {
-    Router::new().route("/v1/calibrations", post(start))
+pub fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new().routes(routes!(start_calibration))
 }
 
-/// 202 with the operation's `Location`; bad specs are refused now, not in the worker.
-async fn start(
+/// Starts a calibration: K reference storms on a Latin hypercube, then the PC-NARX fit. Every field
+/// is optional (the paper's study by default); a bad spec is refused now, not in the worker.
+#[utoipa::path(post, path = "/v1/calibrations", tag = "calibrations",
+    request_body = CalibrationRequest,
+    params(("Idempotency-Key" = Option<String>, Header, description = "Makes a retry return the same operation")),
+    responses(
+        (status = 202, description = "Queued; follow `Location`", body = Operation,
+            headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
+        (status = 422, description = "A field is invalid (named in `errors`), or the Idempotency-Key was used with another request", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 503, description = "The queue is full", body = ProblemDetails, content_type = "application/problem+json",
+            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
+    ))]
+async fn start_calibration(
     State(state): State<AppState>,
     headers: HeaderMap,
     ApiJson(request): ApiJson<CalibrationRequest>,
 ) -> Result<Response, ApiError> {
     request.resolve(&state.config)?;
     let text = serde_json::to_string(&request).expect("a request serialises");
-    accept_job(&state, &headers, "calibrations", "calibration", text).await
+    accept_job(&state, &headers, "calibrations", OperationKind::Calibration, text).await
 }

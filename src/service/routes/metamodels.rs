@@ -1,48 +1,88 @@
 //! Stored metamodels, and the exceedance curves sampled from them.
 
-use super::{ApiJson, Page};
-use crate::analysis::{
-    Response, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg, metamodel_peaks,
-};
+use super::{ApiJson, ApiQuery, Page, accept_job};
+use crate::analysis::exceedance_svg;
 use crate::problem::Problem;
-use crate::service::error::ApiError;
+use crate::service::error::{ApiError, ProblemDetails};
+use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
+use crate::service::routes::operations::{Operation, OperationKind};
 use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
 use crate::surrogate::{Metamodel, Silent};
-use axum::extract::{Path, Query, State};
+use axum::Json;
+use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response as HttpResponse};
-use axum::routing::{get, post};
-use axum::{Json, Router};
-use serde::Deserialize;
-use serde_json::{Value, json};
-use std::collections::BTreeMap;
+use serde::Serialize;
 use std::sync::Arc;
+use utoipa::ToSchema;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
 
-pub fn router() -> Router<AppState> {
-    Router::new()
-        .route("/v1/metamodels", get(list))
-        .route("/v1/metamodels/{id}", get(one).delete(remove))
-        .route("/v1/metamodels/{id}/exceedance", post(exceedance))
-        .route("/v1/metamodels/{id}/validations", post(start_validation))
+pub fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(list_metamodels))
+        .routes(routes!(get_metamodel, delete_metamodel))
+        .routes(routes!(exceedance_curve))
+        .routes(routes!(start_validation))
 }
 
-async fn list(State(state): State<AppState>, Query(page): Query<Page>) -> Result<Json<Value>, ApiError> {
+/// A stored metamodel in a list.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MetamodelSummary {
+    pub id: String,
+    /// The calibration that produced it.
+    pub operation_id: Option<String>,
+    /// The study's name (a preset or `custom`).
+    pub preset: String,
+    pub created_at_ms: i64,
+}
+
+#[derive(Debug, Serialize, ToSchema)]
+pub struct MetamodelList {
+    pub metamodels: Vec<MetamodelSummary>,
+    pub limit: i64,
+    pub offset: i64,
+}
+
+/// Stored metamodels, newest first.
+#[utoipa::path(get, path = "/v1/metamodels", tag = "metamodels", params(Page),
+    responses(
+        (status = 200, description = "A page of metamodels", body = MetamodelList),
+        (status = 422, description = "limit or offset out of range", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn list_metamodels(
+    State(state): State<AppState>,
+    ApiQuery(page): ApiQuery<Page>,
+) -> Result<Json<MetamodelList>, ApiError> {
     page.check()?;
     let rows = state.store.metamodels(page.limit, page.offset).await?;
-    let items: Vec<Value> = rows
-        .iter()
-        .map(|r| json!({"id": r.id, "operation_id": r.job_id, "preset": r.preset, "created_at_ms": r.created_at}))
+    let metamodels = rows
+        .into_iter()
+        .map(|r| MetamodelSummary { id: r.id, operation_id: r.job_id, preset: r.preset, created_at_ms: r.created_at })
         .collect();
-    Ok(Json(json!({"metamodels": items, "limit": page.limit, "offset": page.offset})))
+    Ok(Json(MetamodelList { metamodels, limit: page.limit, offset: page.offset }))
 }
 
 /// The full metamodel: coefficients and diagnostics, enough to reproduce predictions elsewhere.
-async fn one(State(state): State<AppState>, Path(id): Path<String>) -> Result<HttpResponse, ApiError> {
+#[utoipa::path(get, path = "/v1/metamodels/{id}", tag = "metamodels",
+    params(("id" = String, Path, description = "Metamodel id")),
+    responses(
+        (status = 200, description = "The metamodel document (format `windmeta-pc-narx`)", body = Metamodel),
+        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn get_metamodel(State(state): State<AppState>, Path(id): Path<String>) -> Result<HttpResponse, ApiError> {
     let body = state.store.metamodel_body(&id).await?.ok_or_else(|| ApiError::not_found("metamodel", &id))?;
     Ok(([(header::CONTENT_TYPE, "application/json")], body).into_response())
 }
 
-async fn remove(State(state): State<AppState>, Path(id): Path<String>) -> Result<StatusCode, ApiError> {
+/// Deletes a metamodel (operations that refer to it keep their record).
+#[utoipa::path(delete, path = "/v1/metamodels/{id}", tag = "metamodels",
+    params(("id" = String, Path, description = "Metamodel id")),
+    responses(
+        (status = 204, description = "Deleted"),
+        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn delete_metamodel(State(state): State<AppState>, Path(id): Path<String>) -> Result<StatusCode, ApiError> {
     if !state.store.delete_metamodel(&id).await? {
         return Err(ApiError::not_found("metamodel", &id));
     }
@@ -50,7 +90,8 @@ async fn remove(State(state): State<AppState>, Path(id): Path<String>) -> Result
     Ok(StatusCode::NO_CONTENT)
 }
 
-async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, ApiError> {
+/// A stored metamodel and its rebuilt study, cached by id.
+pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, ApiError> {
     if let Some(found) = state.loaded.lock().expect("cache lock").get(id) {
         return Ok(found.clone());
     }
@@ -67,86 +108,59 @@ async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, ApiE
     Ok(loaded)
 }
 
-#[derive(Debug, Clone, Copy, Deserialize, Default)]
-#[serde(rename_all = "snake_case")]
-enum ResponseKind {
-    #[default]
-    Displacement,
-    Drift,
+/// Whether the client asked for the answer as an operation (RFC 7240 `Prefer: respond-async`).
+fn prefers_async(headers: &HeaderMap) -> bool {
+    headers
+        .get_all("prefer")
+        .iter()
+        .filter_map(|v| v.to_str().ok())
+        .any(|v| v.split(',').any(|p| p.trim().eq_ignore_ascii_case("respond-async")))
 }
 
-#[derive(Debug, Deserialize)]
-#[serde(default, deny_unknown_fields)]
-struct ExceedanceRequest {
-    samples: usize,
-    seed: u64,
-    /// Floor (1-based); the roof when absent.
-    floor: Option<usize>,
-    response: ResponseKind,
-    thresholds: Option<Vec<f64>>,
-    /// Inputs held fixed, by name.
-    fixed: BTreeMap<String, f64>,
-    confidence: f64,
-}
-
-impl Default for ExceedanceRequest {
-    fn default() -> Self {
-        ExceedanceRequest {
-            samples: 1000,
-            seed: 1,
-            floor: None,
-            response: ResponseKind::Displacement,
-            thresholds: None,
-            fixed: BTreeMap::new(),
-            confidence: 0.95,
-        }
-    }
-}
-
-/// The curve with its band, as JSON, CSV or SVG by `Accept`.
-async fn exceedance(
+/// The peak-response exceedance curve with its band, sampled from the metamodel: JSON, CSV or SVG
+/// by `Accept`. Requests above the server's synchronous limit (or with `Prefer: respond-async`)
+/// run as an operation whose `result` is the JSON curve.
+#[utoipa::path(post, path = "/v1/metamodels/{id}/exceedance", tag = "metamodels",
+    request_body = ExceedanceRequest,
+    params(
+        ("id" = String, Path, description = "Metamodel id"),
+        ("Prefer" = Option<String>, Header, description = "`respond-async` to run the request as an operation"),
+        ("Idempotency-Key" = Option<String>, Header, description = "Makes a retry of an asynchronous request return the same operation"),
+    ),
+    responses(
+        (status = 200, description = "The curve", content(
+            (ExceedanceAnswer = "application/json"),
+            (String = "text/csv", example = "threshold_m,probability,lower,upper\n0.31,1,0.996,1\n"),
+            (String = "image/svg+xml"),
+        )),
+        (status = 202, description = "Queued as an operation; follow `Location`", body = Operation,
+            headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
+        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 422, description = "A field is invalid (named in `errors`), or a sample diverged", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 503, description = "The queue is full (asynchronous requests)", body = ProblemDetails, content_type = "application/problem+json",
+            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
+    ))]
+async fn exceedance_curve(
     State(state): State<AppState>,
     Path(id): Path<String>,
     headers: HeaderMap,
     ApiJson(request): ApiJson<ExceedanceRequest>,
 ) -> Result<HttpResponse, ApiError> {
-    if request.samples == 0 || request.samples > state.config.max_samples {
-        return Err(crate::error::Error::invalid(
-            "samples",
-            format!("must be between 1 and {}", state.config.max_samples),
-        )
-        .into());
-    }
-    check_confidence(request.confidence)?;
-    if let Some(t) = &request.thresholds
-        && (t.is_empty() || t.len() > 10_000 || t.iter().any(|x| !x.is_finite()))
-    {
-        return Err(crate::error::Error::invalid("thresholds", "must be 1 to 10000 finite numbers").into());
-    }
+    request.check(&state.config)?;
     let loaded = load(&state, &id).await?;
+    if request.samples > state.config.max_sync_samples || prefers_async(&headers) {
+        let job = ExceedanceJob { metamodel_id: id, request };
+        let text = serde_json::to_string(&job).expect("a job serialises");
+        return accept_job(&state, &headers, "exceedance", OperationKind::Exceedance, text).await;
+    }
     let accept = headers.get(header::ACCEPT).and_then(|v| v.to_str().ok()).unwrap_or("application/json").to_string();
-    let curve = tokio::task::spawn_blocking(
-        move || -> crate::error::Result<(Value, crate::analysis::ExceedanceCurve, String)> {
-            let (metamodel, problem) = loaded.as_ref();
-            let floor = request.floor.unwrap_or(problem.structure.floors());
-            let response = match request.response {
-                ResponseKind::Displacement => Response::Displacement { floor },
-                ResponseKind::Drift => Response::Drift { floor },
-            };
-            let mut inputs = problem.inputs.clone();
-            for (name, value) in &request.fixed {
-                inputs = inputs.with_fixed(name, *value)?;
-            }
-            let peaks = metamodel_peaks(metamodel, problem, &inputs, request.samples, request.seed, response, &Silent)?;
-            let thresholds = request.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-            let curve = exceedance_curve(&peaks, &thresholds, request.confidence);
-            let label = format!("{response:?}");
-            Ok((serde_json::to_value(response).expect("a response serialises"), curve, label))
-        },
-    )
+    let answer = tokio::task::spawn_blocking(move || {
+        let (metamodel, problem) = loaded.as_ref();
+        request.answer(metamodel, problem, &id, &Silent)
+    })
     .await
     .map_err(ApiError::internal)??;
-    let (response, curve, label) = curve;
+    let curve = &answer.curve;
     if accept.contains("text/csv") {
         let mut text = String::from("threshold_m,probability,lower,upper\n");
         for i in 0..curve.thresholds.len() {
@@ -156,16 +170,28 @@ async fn exceedance(
         return Ok(([(header::CONTENT_TYPE, "text/csv")], text).into_response());
     }
     if accept.contains("image/svg+xml") {
-        let svg = exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {label} x (m)"));
+        let svg = exceedance_svg(&[("PC-NARX", curve)], &format!("peak {:?} x (m)", answer.response));
         return Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response());
     }
-    let mut body = serde_json::to_value(&curve).expect("a curve serialises");
-    body["response"] = response;
-    body["metamodel_id"] = json!(id);
-    Ok(Json(body).into_response())
+    Ok(Json(answer).into_response())
 }
 
-/// Queues a validation of the metamodel against the reference on fresh samples (an operation).
+/// Validates the metamodel against the reference model on fresh samples, as an operation whose
+/// `result` is the comparison (correlation, errors, both curves).
+#[utoipa::path(post, path = "/v1/metamodels/{id}/validations", tag = "metamodels",
+    request_body = ValidationRequest,
+    params(
+        ("id" = String, Path, description = "Metamodel id"),
+        ("Idempotency-Key" = Option<String>, Header, description = "Makes a retry return the same operation"),
+    ),
+    responses(
+        (status = 202, description = "Queued; follow `Location`", body = Operation,
+            headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
+        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 422, description = "A field is invalid (named in `errors`), or the Idempotency-Key was used with another request", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 503, description = "The queue is full", body = ProblemDetails, content_type = "application/problem+json",
+            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
+    ))]
 async fn start_validation(
     State(state): State<AppState>,
     Path(id): Path<String>,
@@ -182,5 +208,5 @@ async fn start_validation(
     }
     let queued = ValidationJob { metamodel_id: id, samples: request.samples, seed: request.seed };
     let text = serde_json::to_string(&queued).expect("a job serialises");
-    super::accept_job(&state, &headers, "validations", "validation", text).await
+    accept_job(&state, &headers, "validations", OperationKind::Validation, text).await
 }

@@ -3,31 +3,53 @@
 mod auth;
 mod calibrations;
 mod health;
-mod metamodels;
-mod operations;
+pub mod metamodels;
+mod openapi;
+pub mod operations;
 mod presets;
 mod telemetry;
 
+pub use openapi::openapi;
+
 use super::AppState;
+use super::error::ApiError;
+use crate::service::store::Enqueued;
 use axum::Router;
-use axum::extract::rejection::JsonRejection;
-use axum::extract::{FromRequest, Request};
+use axum::extract::rejection::{JsonRejection, QueryRejection};
+use axum::extract::{FromRequest, FromRequestParts, Request};
+use axum::http::request::Parts;
+use operations::OperationKind;
 use serde::de::DeserializeOwned;
+use std::sync::Arc;
 use tower_http::request_id::{MakeRequestUuid, PropagateRequestIdLayer, SetRequestIdLayer};
 use tower_http::trace::TraceLayer;
+use utoipa_axum::router::OpenApiRouter;
 
-pub fn router(state: AppState) -> Router {
-    let limit = state.config.max_body_bytes;
-    let api = Router::new()
+/// Every documented route, with its documentation.
+fn documented() -> OpenApiRouter<AppState> {
+    OpenApiRouter::with_openapi(openapi::base())
+        .merge(health::router())
+        .merge(telemetry::router())
         .merge(presets::router())
         .merge(calibrations::router())
         .merge(operations::router())
         .merge(metamodels::router())
-        .layer(axum::middleware::from_fn_with_state(state.clone(), auth::require_api_key));
-    let mut app = Router::new()
-        .merge(health::router())
-        .merge(telemetry::router())
-        .merge(api)
+}
+
+pub fn router(state: AppState) -> Router {
+    let limit = state.config.max_body_bytes;
+    let (routes, mut spec) = documented().split_for_parts();
+    openapi::add_shared_responses(&mut spec);
+    let spec = Arc::new(spec.to_pretty_json().expect("the OpenAPI document serialises"));
+    let mut app = routes
+        .route(
+            "/openapi.json",
+            axum::routing::get(move || async move {
+                ([(axum::http::header::CONTENT_TYPE, "application/json")], (*spec).clone())
+            }),
+        )
+        .fallback(|| async { ApiError::new(axum::http::StatusCode::NOT_FOUND, "Not found", "no such route") })
+        .route_layer(axum::middleware::from_fn_with_state(state.clone(), auth::require_api_key))
         .route_layer(axum::middleware::from_fn(telemetry::track))
         .with_state(state.clone());
     if !state.config.cors_origins.is_empty() {
@@ -55,19 +77,42 @@ impl<S: Send + Sync, T: DeserializeOwned> FromRequest<S> for ApiJson<T> {
     }
 }
 
-fn payload_error(rejection: JsonRejection) -> super::error::ApiError {
+fn payload_error(rejection: JsonRejection) -> ApiError {
     if rejection.status() == axum::http::StatusCode::PAYLOAD_TOO_LARGE {
-        return super::error::ApiError::new(rejection.status(), "Request body too large", rejection.body_text());
+        return ApiError::new(rejection.status(), "Request body too large", rejection.body_text());
     }
     rejection.into()
 }
 
+/// Query parameters whose rejection (a value of the wrong type) is problem+json.
+pub struct ApiQuery<T>(pub T);
+
+impl<S: Send + Sync, T: DeserializeOwned> FromRequestParts<S> for ApiQuery<T> {
+    type Rejection = ApiError;
+
+    async fn from_request_parts(parts: &mut Parts, state: &S) -> Result<Self, Self::Rejection> {
+        match axum::extract::Query::<T>::from_request_parts(parts, state).await {
+            Ok(axum::extract::Query(value)) => Ok(ApiQuery(value)),
+            Err(rejection) => Err(query_error(rejection)),
+        }
+    }
+}
+
+fn query_error(rejection: QueryRejection) -> ApiError {
+    ApiError::new(rejection.status(), "Malformed query", rejection.body_text())
+}
+
 /// Pagination of lists: `?limit=&offset=`.
-#[derive(Debug, serde::Deserialize)]
+#[derive(Debug, serde::Deserialize, utoipa::IntoParams)]
+#[into_params(parameter_in = Query)]
 pub struct Page {
+    /// Items per page, 1 to 500.
     #[serde(default = "default_limit")]
+    #[param(minimum = 1, maximum = 500, default = 50)]
     pub limit: i64,
+    /// Items to skip.
     #[serde(default)]
+    #[param(minimum = 0, default = 0)]
     pub offset: i64,
 }
 
@@ -76,27 +121,30 @@ fn default_limit() -> i64 {
 }
 
 impl Page {
-    pub fn check(&self) -> Result<(), super::error::ApiError> {
-        if !(1..=500).contains(&self.limit) || self.offset < 0 {
-            return Err(super::error::ApiError::new(
-                axum::http::StatusCode::UNPROCESSABLE_ENTITY,
-                "Invalid request",
-                "limit must be between 1 and 500 and offset non-negative",
-            ));
+    pub fn check(&self) -> Result<(), ApiError> {
+        if !(1..=500).contains(&self.limit) {
+            return Err(crate::error::Error::invalid("limit", "must be between 1 and 500").into());
+        }
+        if self.offset < 0 {
+            return Err(crate::error::Error::invalid("offset", "must not be negative").into());
         }
         Ok(())
     }
 }
 
+/// How long a client should wait before offering work to a full queue again (s).
+const QUEUE_FULL_RETRY_S: u64 = 30;
+
 /// Queues a job and answers 202 with its `Location`, honouring `Idempotency-Key`: a retry with the
-/// same body gets the same operation, a different body under the same key is refused (422).
+/// same body gets the same operation, a different body under the same key is refused (422). A
+/// full queue is 503 with `Retry-After`.
 pub async fn accept_job(
     state: &AppState,
     headers: &axum::http::HeaderMap,
     endpoint: &str,
-    kind: &str,
+    kind: OperationKind,
     request: String,
-) -> Result<axum::response::Response, super::error::ApiError> {
+) -> Result<axum::response::Response, ApiError> {
     use axum::http::{StatusCode, header};
     use axum::response::IntoResponse;
     let key = match headers.get("idempotency-key") {
@@ -112,23 +160,32 @@ pub async fn accept_job(
             }
         },
     };
-    let mut id = uuid::Uuid::new_v4().to_string();
-    let earlier = state.store.insert_job(&id, kind, &request, key.as_deref().map(|k| (k, endpoint))).await?;
-    if let Some((operation, stored)) = earlier {
-        if stored != request {
+    let new_id = uuid::Uuid::new_v4().to_string();
+    let idempotency = key.as_deref().map(|k| (k, endpoint));
+    let max_queued = state.config.max_queued_jobs as i64;
+    let id = match state.store.insert_job(&new_id, kind.as_str(), &request, idempotency, max_queued).await? {
+        Enqueued::New => {
+            state.wake.notify_one();
+            new_id
+        }
+        Enqueued::Earlier { id, request: stored } if stored == request => id,
+        Enqueued::Earlier { .. } => {
             return Err(
                 crate::error::Error::invalid("Idempotency-Key", "was already used with a different request").into()
             );
         }
-        id = operation;
-    } else {
-        state.wake.notify_one();
-    }
-    let row = state.store.job(&id).await?.ok_or_else(|| super::error::ApiError::internal("a queued job vanished"))?;
+        Enqueued::QueueFull => {
+            return Err(ApiError::unavailable(
+                format!("{} jobs are waiting already; try again later", state.config.max_queued_jobs),
+                QUEUE_FULL_RETRY_S,
+            ));
+        }
+    };
+    let row = state.store.job(&id).await?.ok_or_else(|| ApiError::internal("a queued job vanished"))?;
     Ok((
         StatusCode::ACCEPTED,
         [(header::LOCATION, format!("/v1/operations/{id}")), (header::RETRY_AFTER, "2".to_string())],
-        axum::Json(operations::operation(&row)),
+        axum::Json(operations::operation(&row)?),
     )
         .into_response())
 }

@@ -1,68 +1,180 @@
 //! Long work as operations: state, progress, cancellation.
 
-use super::Page;
+use super::{ApiQuery, Page};
+use crate::analysis::ValidationReport;
 use crate::service::AppState;
-use crate::service::error::ApiError;
+use crate::service::error::{ApiError, ProblemDetails};
+use crate::service::exceedance::ExceedanceAnswer;
 use crate::service::store::JobRow;
-use axum::extract::{Path, Query, State};
+use crate::surrogate::Progress;
+use axum::Json;
+use axum::extract::{Path, State};
 use axum::response::sse::{Event, KeepAlive, Sse};
-use axum::routing::{get, post};
-use axum::{Json, Router};
 use futures_util::Stream;
-use serde_json::{Value, json};
+use serde::{Deserialize, Serialize};
 use std::convert::Infallible;
 use std::time::Duration;
+use utoipa::ToSchema;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
 
-pub fn router() -> Router<AppState> {
-    Router::new()
-        .route("/v1/operations", get(list))
-        .route("/v1/operations/{id}", get(one))
-        .route("/v1/operations/{id}/cancel", post(cancel))
-        .route("/v1/operations/{id}/events", get(events))
+pub fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new()
+        .routes(routes!(list_operations))
+        .routes(routes!(get_operation))
+        .routes(routes!(cancel_operation))
+        .routes(routes!(operation_events))
+}
+
+/// What kind of work an operation does.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum OperationKind {
+    Calibration,
+    Validation,
+    Exceedance,
+}
+
+impl OperationKind {
+    pub fn as_str(self) -> &'static str {
+        match self {
+            OperationKind::Calibration => "calibration",
+            OperationKind::Validation => "validation",
+            OperationKind::Exceedance => "exceedance",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum OperationState {
+    Queued,
+    Running,
+    Succeeded,
+    Failed,
+    Cancelled,
+}
+
+/// What a finished operation produced besides a metamodel.
+#[derive(Debug, Clone, Serialize, ToSchema)]
+#[serde(untagged)]
+pub enum OperationResult {
+    Validation(Box<ValidationReport>),
+    Exceedance(Box<ExceedanceAnswer>),
+}
+
+/// Long-running work (a calibration, a validation, a large exceedance request).
+#[derive(Debug, Clone, Serialize, ToSchema)]
+pub struct Operation {
+    pub id: String,
+    pub kind: OperationKind,
+    pub state: OperationState,
+    /// Whether the state is final (succeeded, failed or cancelled).
+    pub done: bool,
+    /// The latest progress report, saved every second while it runs.
+    pub progress: Option<Progress>,
+    /// Why it failed.
+    pub error: Option<String>,
+    /// The metamodel a succeeded calibration stored.
+    pub metamodel_id: Option<String>,
+    /// The report of a succeeded validation or the curve of a succeeded exceedance request.
+    pub result: Option<OperationResult>,
+    /// How many times a worker took it up (more than one after a restart or a lost lease).
+    pub attempts: i64,
+    pub created_at_ms: i64,
+    pub started_at_ms: Option<i64>,
+    pub finished_at_ms: Option<i64>,
+    /// Wall time from start to finish.
+    pub seconds: Option<f64>,
+}
+
+#[derive(Debug, Serialize, ToSchema)]
+pub struct OperationList {
+    pub operations: Vec<Operation>,
+    pub limit: i64,
+    pub offset: i64,
+}
+
+fn stored<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ApiError> {
+    serde_json::from_str(text).map_err(ApiError::internal)
 }
 
 /// The public view of a job.
-pub fn operation(row: &JobRow) -> Value {
-    let progress: Value = row.progress.as_deref().and_then(|p| serde_json::from_str(p).ok()).unwrap_or(Value::Null);
-    json!({
-        "id": row.id,
-        "kind": row.kind,
-        "state": row.state,
-        "done": matches!(row.state.as_str(), "succeeded" | "failed" | "cancelled"),
-        "progress": progress,
-        "error": row.error,
-        "metamodel_id": row.metamodel_id,
-        "result": row.result.as_deref().and_then(|r| serde_json::from_str::<Value>(r).ok()),
-        "attempts": row.attempts,
-        "created_at_ms": row.created_at,
-        "started_at_ms": row.started_at,
-        "finished_at_ms": row.finished_at,
-        "seconds": row.started_at.zip(row.finished_at).map(|(s, f)| (f - s) as f64 / 1000.0),
+pub fn operation(row: &JobRow) -> Result<Operation, ApiError> {
+    let kind: OperationKind = stored(&format!("\"{}\"", row.kind))?;
+    let state: OperationState = stored(&format!("\"{}\"", row.state))?;
+    let result = match (&row.result, kind) {
+        (None, _) | (Some(_), OperationKind::Calibration) => None,
+        (Some(text), OperationKind::Validation) => Some(OperationResult::Validation(stored(text)?)),
+        (Some(text), OperationKind::Exceedance) => Some(OperationResult::Exceedance(stored(text)?)),
+    };
+    Ok(Operation {
+        id: row.id.clone(),
+        kind,
+        state,
+        done: matches!(state, OperationState::Succeeded | OperationState::Failed | OperationState::Cancelled),
+        progress: row.progress.as_deref().map(stored).transpose()?,
+        error: row.error.clone(),
+        metamodel_id: row.metamodel_id.clone(),
+        result,
+        attempts: row.attempts,
+        created_at_ms: row.created_at,
+        started_at_ms: row.started_at,
+        finished_at_ms: row.finished_at,
+        seconds: row.started_at.zip(row.finished_at).map(|(s, f)| (f - s) as f64 / 1000.0),
     })
 }
 
-async fn list(State(state): State<AppState>, Query(page): Query<Page>) -> Result<Json<Value>, ApiError> {
+/// Operations, newest first.
+#[utoipa::path(get, path = "/v1/operations", tag = "operations", params(Page),
+    responses(
+        (status = 200, description = "A page of operations", body = OperationList),
+        (status = 422, description = "limit or offset out of range", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn list_operations(
+    State(state): State<AppState>,
+    ApiQuery(page): ApiQuery<Page>,
+) -> Result<Json<OperationList>, ApiError> {
     page.check()?;
     let rows = state.store.jobs(page.limit, page.offset).await?;
-    Ok(Json(
-        json!({"operations": rows.iter().map(operation).collect::<Vec<_>>(), "limit": page.limit, "offset": page.offset}),
-    ))
+    let operations = rows.iter().map(operation).collect::<Result<_, _>>()?;
+    Ok(Json(OperationList { operations, limit: page.limit, offset: page.offset }))
 }
 
-async fn one(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+/// One operation: state, progress, timings and, once done, its outcome.
+#[utoipa::path(get, path = "/v1/operations/{id}", tag = "operations",
+    params(("id" = String, Path, description = "Operation id")),
+    responses(
+        (status = 200, description = "The operation", body = Operation),
+        (status = 404, description = "No such operation", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn get_operation(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Operation>, ApiError> {
     let row = state.store.job(&id).await?.ok_or_else(|| ApiError::not_found("operation", &id))?;
-    Ok(Json(operation(&row)))
+    Ok(Json(operation(&row)?))
 }
 
-/// A queued job is cancelled at once; a running one stops within about a second.
-async fn cancel(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Value>, ApiError> {
+/// Cancels an operation: a queued one at once, a running one within about a second (between
+/// experiments or samples). Cancelling a finished operation changes nothing.
+#[utoipa::path(post, path = "/v1/operations/{id}/cancel", tag = "operations",
+    params(("id" = String, Path, description = "Operation id")),
+    responses(
+        (status = 200, description = "The operation after the request", body = Operation),
+        (status = 404, description = "No such operation", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn cancel_operation(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Operation>, ApiError> {
     let row = state.store.request_cancel(&id).await?.ok_or_else(|| ApiError::not_found("operation", &id))?;
-    Ok(Json(operation(&row)))
+    Ok(Json(operation(&row)?))
 }
 
-/// The operation as server-sent events: one `operation` event whenever it changes, the stream ending
-/// when it is done. It reads the database, so any replica can serve it.
-async fn events(
+/// The operation as server-sent events: one `operation` event (an `Operation` as JSON) whenever it
+/// changes, the stream ending when it is done. It reads the database, so any replica can serve it.
+#[utoipa::path(get, path = "/v1/operations/{id}/events", tag = "operations",
+    params(("id" = String, Path, description = "Operation id")),
+    responses(
+        (status = 200, description = "`operation` events, each an Operation as JSON", content_type = "text/event-stream", body = String),
+        (status = 404, description = "No such operation", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn operation_events(
     State(state): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Sse<impl Stream<Item = Result<Event, Infallible>>>, ApiError> {
@@ -74,13 +186,12 @@ async fn events(
             }
             loop {
                 let row = state.store.job(&id).await.ok().flatten()?;
-                let value = operation(&row);
-                let text = value.to_string();
+                let value = operation(&row).ok()?;
+                let text = serde_json::to_string(&value).expect("an operation serialises");
                 if last.as_deref() != Some(text.as_str()) {
-                    let done = value["done"].as_bool().unwrap_or(false);
                     return Some((
                         Ok(Event::default().event("operation").data(text.clone())),
-                        (state, id, Some(text), done),
+                        (state, id, Some(text), value.done),
                     ));
                 }
                 tokio::time::sleep(Duration::from_millis(500)).await;

@@ -1,46 +1,79 @@
 //! The built-in studies and their default calibration requests, for clients to start from.
 
 use crate::problem::{PRESETS, Problem};
-use crate::service::AppState;
-use crate::service::error::ApiError;
+use crate::service::error::{ApiError, ProblemDetails};
+use crate::service::{AppState, CalibrationRequest};
+use crate::surrogate::CalibrationOptions;
+use axum::Json;
 use axum::extract::Path;
-use axum::routing::get;
-use axum::{Json, Router};
-use serde_json::{Value, json};
+use serde::Serialize;
+use utoipa::ToSchema;
+use utoipa_axum::router::OpenApiRouter;
+use utoipa_axum::routes;
 
-pub fn router() -> Router<AppState> {
-    Router::new().route("/v1/presets", get(list)).route("/v1/presets/{name}", get(one))
+pub fn router() -> OpenApiRouter<AppState> {
+    OpenApiRouter::new().routes(routes!(list_presets)).routes(routes!(get_preset))
 }
 
-fn describe(name: &str) -> Result<Value, ApiError> {
+/// A built-in study.
+#[derive(Debug, Serialize, ToSchema)]
+pub struct Preset {
+    pub name: String,
+    pub description: String,
+    pub floors: usize,
+    pub roof_height_m: f64,
+    /// Natural circular frequencies of the modes kept (rad/s), at the mean inputs.
+    pub frequencies_rad_s: Vec<f64>,
+    /// The calibration request the defaults amount to, spelled out.
+    pub default_calibration: CalibrationRequest,
+}
+
+#[derive(Debug, Serialize, ToSchema)]
+pub struct PresetList {
+    pub presets: Vec<Preset>,
+}
+
+fn describe(name: &str) -> Result<Preset, ApiError> {
     let problem = Problem::preset(name).map_err(|_| ApiError::not_found("preset", name))?;
-    let inputs: serde_json::Map<String, Value> = problem
-        .inputs
-        .inputs
-        .iter()
-        .map(|i| (i.name.clone(), serde_json::to_value(i.marginal).expect("a marginal serialises")))
-        .collect();
-    Ok(json!({
-        "name": name,
-        "description": if name == "frame40" {
-            "The paper's 40-storey steel frame, damper coefficients as printed (N·s/m)"
-        } else {
-            "The paper's 40-storey steel frame, damper coefficients in kN·s/m"
+    let defaults = CalibrationOptions::default();
+    let description = if name == "frame40" {
+        "The paper's 40-storey steel frame, damper coefficients as printed (N·s/m)"
+    } else {
+        "The paper's 40-storey steel frame, damper coefficients in kN·s/m"
+    };
+    Ok(Preset {
+        name: name.to_string(),
+        description: description.to_string(),
+        floors: problem.structure.floors(),
+        roof_height_m: *problem.structure.floor_elevations.last().expect("a structure has floors"),
+        frequencies_rad_s: problem.modes.frequencies.clone(),
+        default_calibration: CalibrationRequest {
+            preset: Some(name.to_string()),
+            inputs: problem.inputs.inputs.iter().map(|i| (i.name.clone(), i.marginal)).collect(),
+            modes: Some(problem.modes.frequencies.len()),
+            duration_s: Some(problem.storm.duration),
+            time_step_s: Some(problem.storm.time_step),
+            experiments: Some(defaults.experiments),
+            seed: Some(defaults.seed),
+            ..CalibrationRequest::default()
         },
-        "floors": problem.structure.floors(),
-        "roof_height_m": problem.structure.floor_elevations.last(),
-        "frequencies_rad_s": problem.modes.frequencies,
-        "default_calibration": {
-            "preset": name, "experiments": 200, "duration_s": 900.0, "time_step_s": 0.01, "modes": 3, "seed": 1,
-            "inputs": inputs,
-        },
-    }))
+    })
 }
 
-async fn list() -> Result<Json<Value>, ApiError> {
-    Ok(Json(json!({"presets": PRESETS.iter().map(|n| describe(n)).collect::<Result<Vec<_>, _>>()?})))
+/// The built-in studies.
+#[utoipa::path(get, path = "/v1/presets", tag = "presets",
+    responses((status = 200, description = "Every preset", body = PresetList)))]
+async fn list_presets() -> Result<Json<PresetList>, ApiError> {
+    Ok(Json(PresetList { presets: PRESETS.iter().map(|n| describe(n)).collect::<Result<_, _>>()? }))
 }
 
-async fn one(Path(name): Path<String>) -> Result<Json<Value>, ApiError> {
+/// One built-in study and its default calibration request.
+#[utoipa::path(get, path = "/v1/presets/{name}", tag = "presets",
+    params(("name" = String, Path, description = "Preset name, e.g. `frame40-kn`")),
+    responses(
+        (status = 200, description = "The preset", body = Preset),
+        (status = 404, description = "No such preset", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn get_preset(Path(name): Path<String>) -> Result<Json<Preset>, ApiError> {
     Ok(Json(describe(&name)?))
 }

@@ -1,0 +1,100 @@
+//! The API description, generated from the routes themselves (utoipa-axum registers a handler and
+//! its documentation together, so paths and methods cannot drift). Responses that come from the
+//! shared machinery rather than from a handler are added here by the same rules the machinery
+//! follows, so each operation documents exactly the statuses it can return.
+
+use utoipa::OpenApi;
+use utoipa::openapi::path::{Operation, ParameterIn};
+use utoipa::openapi::security::{Http, HttpAuthScheme, SecurityRequirement, SecurityScheme};
+use utoipa::openapi::{ContentBuilder, Ref, RefOr, Response, ResponseBuilder};
+
+#[derive(OpenApi)]
+#[openapi(
+    info(
+        title = "windmeta",
+        description = "Rapid uncertainty quantification of tall buildings under stochastic wind: PC-NARX \
+            metamodels calibrated on a Latin hypercube of reference storms, sampled for peak-response \
+            exceedance curves. Long work (calibrations, validations, large exceedance requests) runs as \
+            operations: `202 Accepted` with `Location`, then poll or stream the operation. Errors are \
+            RFC 9457 problem details naming the field at fault.",
+        license(name = "MIT OR Apache-2.0", identifier = "MIT OR Apache-2.0"),
+    ),
+    tags(
+        (name = "calibrations", description = "Fitting metamodels"),
+        (name = "operations", description = "Long-running work: state, progress, cancellation"),
+        (name = "metamodels", description = "Stored metamodels, exceedance curves, validations"),
+        (name = "presets", description = "Built-in studies"),
+        (name = "health", description = "Liveness, readiness, metrics"),
+    ),
+    components(schemas(crate::service::error::ProblemDetails))
+)]
+struct ApiDoc;
+
+/// The document before the routes add themselves.
+pub fn base() -> utoipa::openapi::OpenApi {
+    ApiDoc::openapi()
+}
+
+/// The complete API description, as served at `/openapi.json` and committed as openapi/openapi.yaml.
+pub fn openapi() -> utoipa::openapi::OpenApi {
+    let (_, mut spec) = super::documented().split_for_parts();
+    add_shared_responses(&mut spec);
+    spec
+}
+
+/// A shared error response: problem details with the given description.
+fn problem(description: &str) -> Response {
+    let content = ContentBuilder::new().schema(Some(Ref::from_schema_name("ProblemDetails"))).build();
+    ResponseBuilder::new().description(description).content("application/problem+json", content).build()
+}
+
+/// The responses no handler writes itself, and the rule saying which operations can return them:
+/// - every `/v1/` operation: 401 (when the server has API keys) and 500 (the database failed),
+///   except the presets, which touch no database;
+/// - every operation with a JSON body: 400 (malformed), 413 (too large), 415 (not JSON);
+/// - every operation with query parameters: 400 (a value of the wrong type).
+pub fn add_shared_responses(spec: &mut utoipa::openapi::OpenApi) {
+    let components = spec.components.get_or_insert_with(Default::default);
+    components.add_security_scheme("bearer", SecurityScheme::Http(Http::new(HttpAuthScheme::Bearer)));
+    let shared = [
+        ("BadRequest", "The body is not valid JSON, or a query parameter has the wrong type"),
+        ("Unauthorized", "The server has API keys and the request has no valid `Authorization: Bearer` key"),
+        ("PayloadTooLarge", "The body is larger than the server accepts"),
+        ("UnsupportedMediaType", "The body is not `application/json`"),
+        ("InternalError", "The server failed (the database); the error is logged"),
+    ];
+    for (name, description) in shared {
+        components.responses.insert(name.to_string(), RefOr::T(problem(description)));
+    }
+    for (path, item) in spec.paths.paths.iter_mut() {
+        let operations = [&mut item.get, &mut item.post, &mut item.delete, &mut item.put, &mut item.patch];
+        for operation in operations.into_iter().flatten() {
+            add_to_operation(path, operation);
+        }
+    }
+}
+
+fn add_to_operation(path: &str, operation: &mut Operation) {
+    let mut shared = Vec::new();
+    if path.starts_with("/v1/") {
+        shared.push(("401", "Unauthorized"));
+        // An empty requirement besides the key: the server may run without keys.
+        operation.security = Some(vec![SecurityRequirement::default(), SecurityRequirement::new("bearer", [""; 0])]);
+        if !path.starts_with("/v1/presets") {
+            shared.push(("500", "InternalError"));
+        }
+    }
+    if operation.request_body.is_some() {
+        shared.extend([("400", "BadRequest"), ("413", "PayloadTooLarge"), ("415", "UnsupportedMediaType")]);
+    }
+    let has_query = operation.parameters.iter().flatten().any(|p| match p {
+        RefOr::T(parameter) => parameter.parameter_in == ParameterIn::Query,
+        RefOr::Ref(_) => false,
+    });
+    if has_query {
+        shared.push(("400", "BadRequest"));
+    }
+    for (status, name) in shared {
+        operation.responses.responses.insert(status.to_string(), RefOr::Ref(Ref::from_response_name(name)));
+    }
+}
