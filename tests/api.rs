@@ -5,7 +5,7 @@ use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tokio::sync::oneshot;
-use windmeta::service::{Application, ServeArgs};
+use windmeta::service::{Application, Role, ServeArgs};
 
 struct TestApp {
     address: String,
@@ -40,6 +40,7 @@ async fn spawn_app_configured(db: &std::path::Path, adjust: impl FnOnce(&mut Ser
         cors_origins: vec![],
         listen: "127.0.0.1:0".into(),
         database_url: format!("sqlite://{}", db.display()),
+        role: Role::All,
         workers: 1,
         max_body_bytes: 64 * 1024,
         max_samples: 2000,

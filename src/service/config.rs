@@ -1,15 +1,30 @@
 //! `windmeta serve` settings, as flags or environment variables.
 
-use clap::Args;
+use clap::{Args, ValueEnum};
+
+/// What a replica does, so that request handling and heavy work can scale apart.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum Role {
+    /// The API and the workers.
+    All,
+    /// The API only: jobs are queued for worker replicas.
+    Api,
+    /// Workers only, with health and metrics endpoints for the orchestrator.
+    Worker,
+}
 
 #[derive(Debug, Clone, Args)]
 pub struct ServeArgs {
     /// Address to listen on (port 0: any free port).
     #[arg(long, env = "WINDMETA_LISTEN", default_value = "127.0.0.1:8080")]
     pub listen: String,
-    /// Database: an SQLite file (created if missing) or, later, postgres://….
+    /// Database: an SQLite file (created if missing; one replica), or postgres://… shared by
+    /// several replicas.
     #[arg(long, env = "DATABASE_URL", default_value = "sqlite://windmeta.db")]
     pub database_url: String,
+    /// What this replica does.
+    #[arg(long, env = "WINDMETA_ROLE", value_enum, default_value_t = Role::All)]
+    pub role: Role,
     /// Calibration jobs run at once (each uses every core through rayon).
     #[arg(long, env = "WINDMETA_WORKERS", default_value_t = 1)]
     pub workers: usize,

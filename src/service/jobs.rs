@@ -32,6 +32,12 @@ impl Observer for Shared {
     }
 }
 
+/// Who holds a lease, for people reading the jobs table: host and process id.
+fn replica_name() -> String {
+    let host = std::env::var("HOSTNAME").unwrap_or_else(|_| "host".into());
+    format!("{host}-pid{}", std::process::id())
+}
+
 /// Runs `count` workers until shutdown.
 pub fn spawn_workers(state: AppState, count: usize) -> Vec<tokio::task::JoinHandle<()>> {
     (0..count)
@@ -43,7 +49,7 @@ pub fn spawn_workers(state: AppState, count: usize) -> Vec<tokio::task::JoinHand
 }
 
 async fn worker(state: AppState) {
-    let owner = format!("worker-{}", uuid::Uuid::new_v4());
+    let owner = format!("{}-{}", replica_name(), uuid::Uuid::new_v4().simple());
     while !state.draining.load(Ordering::Relaxed) {
         match state.store.claim(&owner, state.config.lease_ms).await {
             Ok(Some(job)) => run(&state, &owner, job.id, &job.kind, job.request).await,

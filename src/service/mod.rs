@@ -8,8 +8,10 @@ mod jobs;
 mod routes;
 mod store;
 
-pub use config::ServeArgs;
+pub use config::{Role, ServeArgs};
 pub use routes::openapi;
+#[doc(hidden)]
+pub use store::testing;
 
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
@@ -167,7 +169,10 @@ impl Application {
     /// Serves until `shutdown` resolves, then drains: stops claiming, gives running jobs back to
     /// the queue, finishes open requests.
     pub async fn run(self, shutdown: impl std::future::Future<Output = ()> + Send + 'static) -> std::io::Result<()> {
-        let workers = jobs::spawn_workers(self.state.clone(), self.state.config.workers);
+        let workers = match self.state.config.role {
+            Role::Api => Vec::new(),
+            Role::All | Role::Worker => jobs::spawn_workers(self.state.clone(), self.state.config.workers),
+        };
         let draining = self.state.draining.clone();
         let app = routes::router(self.state.clone());
         axum::serve(self.listener, app)
@@ -208,14 +213,14 @@ pub fn serve(args: &ServeArgs) -> Result<String> {
     let _ = tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
         .try_init();
-    if args.workers == 0 {
+    if args.workers == 0 && args.role != Role::Api {
         return Err(Error::invalid("workers", "at least one worker is needed"));
     }
     let runtime =
         tokio::runtime::Runtime::new().map_err(|e| Error::Numerical(format!("cannot start the runtime: {e}")))?;
     runtime.block_on(async {
         let app = Application::build(args.clone()).await.map_err(|e| Error::invalid("serve", e))?;
-        tracing::info!(address = %app.local_addr(), database = %args.database_url, "windmeta listening");
+        tracing::info!(address = %app.local_addr(), role = ?args.role, "windmeta listening");
         app.run(shutdown_signal()).await.map_err(|e| Error::Numerical(format!("server: {e}")))
     })?;
     Ok("stopped".into())

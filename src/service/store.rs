@@ -1,5 +1,8 @@
-//! The database: calibration jobs as a lease table, and the stored metamodels. One portable schema
-//! (migrations/) over sqlx's `AnyPool`, runtime queries only, times as epoch milliseconds.
+//! The database: jobs as a lease table, and the stored metamodels. One portable schema
+//! (migrations/) over sqlx's `AnyPool` on SQLite (one process) or PostgreSQL (several replicas),
+//! runtime queries only, times as epoch milliseconds. The only statement that differs is the
+//! claim: PostgreSQL skips rows another replica is claiming (`FOR UPDATE SKIP LOCKED`); SQLite
+//! has one writer at a time, so its plain claim cannot hand one job to two workers.
 
 use sqlx::any::{AnyPoolOptions, install_default_drivers};
 use sqlx::{AnyPool, Row};
@@ -53,7 +56,17 @@ pub struct MetamodelRow {
 #[derive(Debug, Clone)]
 pub struct Store {
     pool: AnyPool,
+    backend: Backend,
 }
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    Sqlite,
+    Postgres,
+}
+
+/// A job whose worker died this many times (its lease ran out) is failed rather than tried again.
+pub const MAX_ATTEMPTS: i64 = 3;
 
 /// The job columns, spliced into literal queries (sqlx accepts only audited literal SQL).
 macro_rules! job_columns {
@@ -83,13 +96,20 @@ impl Store {
     /// Connects (creating a SQLite file if needed) and runs the migrations.
     pub async fn connect(url: &str) -> Result<Store, sqlx::Error> {
         install_default_drivers();
-        let url = if url.starts_with("sqlite:") && !url.contains("mode=") {
+        let backend = if url.starts_with("sqlite:") {
+            Backend::Sqlite
+        } else if url.starts_with("postgres:") || url.starts_with("postgresql:") {
+            Backend::Postgres
+        } else {
+            return Err(sqlx::Error::Configuration(format!("`{url}` is neither sqlite://… nor postgres://…").into()));
+        };
+        let url = if backend == Backend::Sqlite && !url.contains("mode=") {
             format!("{url}{}mode=rwc", if url.contains('?') { "&" } else { "?" })
         } else {
             url.to_string()
         };
         let pool = AnyPoolOptions::new()
-            .max_connections(if url.starts_with("sqlite:") { 1 } else { 8 })
+            .max_connections(if backend == Backend::Sqlite { 1 } else { 8 })
             .after_connect(|conn, _| {
                 Box::pin(async move {
                     if conn.backend_name() == "SQLite" {
@@ -102,7 +122,7 @@ impl Store {
             .connect(&url)
             .await?;
         sqlx::migrate!().run(&pool).await?;
-        Ok(Store { pool })
+        Ok(Store { pool, backend })
     }
 
     /// Whether the database answers with the tables the service needs (a live connection to a
@@ -167,16 +187,35 @@ impl Store {
         Ok(Enqueued::New)
     }
 
-    /// Claims the oldest queued job, or a running one whose lease ran out (its worker died).
+    /// Claims the oldest queued job, or a running one whose lease ran out (its worker died). A job
+    /// whose lease ran out [`MAX_ATTEMPTS`] times is failed with the reason instead.
     pub async fn claim(&self, owner: &str, lease_ms: i64) -> Result<Option<JobRow>, sqlx::Error> {
         let now = now_ms();
-        let query = concat!(
-            "UPDATE jobs SET state = 'running', lease_owner = $1, lease_until = $2, attempts = attempts + 1, ",
-            "started_at = COALESCE(started_at, $3) ",
-            "WHERE id = (SELECT id FROM jobs WHERE state = 'queued' OR (state = 'running' AND lease_until < $3) ",
-            "ORDER BY created_at LIMIT 1) RETURNING ",
-            job_columns!()
-        );
+        sqlx::query(
+            "UPDATE jobs SET state = 'failed', finished_at = $1, lease_owner = NULL, \
+             error = 'abandoned: its worker stopped renewing the lease ' || CAST(attempts AS TEXT) || ' times' \
+             WHERE state = 'running' AND lease_until < $1 AND attempts >= $2",
+        )
+        .bind(now)
+        .bind(MAX_ATTEMPTS)
+        .execute(&self.pool)
+        .await?;
+        let query = match self.backend {
+            Backend::Sqlite => concat!(
+                "UPDATE jobs SET state = 'running', lease_owner = $1, lease_until = $2, attempts = attempts + 1, ",
+                "started_at = COALESCE(started_at, $3) ",
+                "WHERE id = (SELECT id FROM jobs WHERE state = 'queued' OR (state = 'running' AND lease_until < $3) ",
+                "ORDER BY created_at LIMIT 1) RETURNING ",
+                job_columns!()
+            ),
+            Backend::Postgres => concat!(
+                "UPDATE jobs SET state = 'running', lease_owner = $1, lease_until = $2, attempts = attempts + 1, ",
+                "started_at = COALESCE(started_at, $3) ",
+                "WHERE id = (SELECT id FROM jobs WHERE state = 'queued' OR (state = 'running' AND lease_until < $3) ",
+                "ORDER BY created_at LIMIT 1 FOR UPDATE SKIP LOCKED) RETURNING ",
+                job_columns!()
+            ),
+        };
         let row = sqlx::query(query).bind(owner).bind(now + lease_ms).bind(now).fetch_optional(&self.pool).await?;
         row.as_ref().map(job).transpose()
     }
@@ -339,5 +378,185 @@ impl Store {
     pub async fn delete_metamodel(&self, id: &str) -> Result<bool, sqlx::Error> {
         let done = sqlx::query("DELETE FROM metamodels WHERE id = $1").bind(id).execute(&self.pool).await?;
         Ok(done.rows_affected() == 1)
+    }
+}
+
+/// Databases for tests: a fresh SQLite file, and a fresh schema on the PostgreSQL at
+/// `WINDMETA_TEST_POSTGRES` (default the local server's `test` database) when one is reachable.
+/// Public (but hidden) so that the integration tests of several processes can use it too.
+#[doc(hidden)]
+pub mod testing {
+
+    pub const DEFAULT_POSTGRES: &str = "postgres://postgres@127.0.0.1:5432/test";
+
+    pub fn postgres_url() -> String {
+        std::env::var("WINDMETA_TEST_POSTGRES").unwrap_or_else(|_| DEFAULT_POSTGRES.to_string())
+    }
+
+    /// A URL to an empty schema of its own on the test PostgreSQL, or None (with the reason
+    /// printed) when none is reachable.
+    pub async fn fresh_postgres() -> Option<String> {
+        sqlx::any::install_default_drivers();
+        let base = postgres_url();
+        let admin = match sqlx::AnyPool::connect(&base).await {
+            Ok(pool) => pool,
+            Err(error) => {
+                eprintln!("PostgreSQL tests skipped: {base} is not reachable ({error})");
+                return None;
+            }
+        };
+        drop_stale_schemas(&admin).await;
+        let schema = format!("windmeta_test_{}_{}", super::now_ms(), uuid::Uuid::new_v4().simple());
+        sqlx::query(sqlx::AssertSqlSafe(format!("CREATE SCHEMA {schema}"))).execute(&admin).await.ok()?;
+        let separator = if base.contains('?') { '&' } else { '?' };
+        Some(format!("{base}{separator}options=-c%20search_path%3D{schema}"))
+    }
+
+    /// Test schemas are named by their creation time; those older than an hour are left-overs.
+    async fn drop_stale_schemas(admin: &sqlx::AnyPool) {
+        use sqlx::Row;
+        let Ok(rows) = sqlx::query(
+            "SELECT CAST(nspname AS TEXT) AS schema_name FROM pg_namespace WHERE nspname LIKE 'windmeta_test_%'",
+        )
+        .fetch_all(admin)
+        .await
+        else {
+            return;
+        };
+        let hour_ago = super::now_ms() - 3_600_000;
+        for row in rows {
+            let name: String = row.try_get("schema_name").unwrap_or_default();
+            let created = name.split('_').nth(2).and_then(|t| t.parse::<i64>().ok()).unwrap_or(0);
+            if created < hour_ago {
+                let _ = sqlx::query(sqlx::AssertSqlSafe(format!("DROP SCHEMA {name} CASCADE"))).execute(admin).await;
+            }
+        }
+    }
+
+    #[cfg(test)]
+    pub async fn stores() -> Vec<(&'static str, super::Store)> {
+        let dir = std::env::temp_dir().join(format!("windmeta-store-{}", uuid::Uuid::new_v4().simple()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let mut stores =
+            vec![("sqlite", super::Store::connect(&format!("sqlite://{}", dir.join("t.db").display())).await.unwrap())];
+        if let Some(url) = fresh_postgres().await {
+            stores.push(("postgres", super::Store::connect(&url).await.unwrap()));
+        }
+        stores
+    }
+}
+
+/// The same suite on both databases.
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    async fn queue(store: &Store, id: &str) {
+        assert_eq!(store.insert_job(id, "calibration", "{}", None, 100).await.unwrap(), Enqueued::New);
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_job_runs_once_and_stores_its_metamodel() {
+        for (name, store) in testing::stores().await {
+            queue(&store, "j1").await;
+            let job = store.claim("w1", 10_000).await.unwrap().expect("a queued job is claimed");
+            assert_eq!((job.id.as_str(), job.state.as_str(), job.attempts), ("j1", "running", 1), "{name}");
+            assert!(store.claim("w2", 10_000).await.unwrap().is_none(), "{name}: claimed twice");
+            assert_eq!(store.heartbeat("j1", "w1", 10_000, Some("{\"stage\":\"x\"}")).await.unwrap(), Some(false));
+            assert!(store.complete("j1", "w1", "m1", "frame40", "{\"a\":1}").await.unwrap(), "{name}");
+            let done = store.job("j1").await.unwrap().unwrap();
+            assert_eq!((done.state.as_str(), done.metamodel_id.as_deref()), ("succeeded", Some("m1")), "{name}");
+            assert_eq!(store.metamodel_body("m1").await.unwrap().as_deref(), Some("{\"a\":1}"), "{name}");
+            assert_eq!(store.metamodels(10, 0).await.unwrap().len(), 1, "{name}");
+            assert!(store.delete_metamodel("m1").await.unwrap() && !store.delete_metamodel("m1").await.unwrap());
+        }
+    }
+
+    /// Many workers claiming at once from many connections: every job exactly once.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn concurrent_claims_hand_out_each_job_once() {
+        for (name, store) in testing::stores().await {
+            for i in 0..20 {
+                queue(&store, &format!("j{i:02}")).await;
+            }
+            let claimers = (0..8).map(|w| {
+                let store = store.clone();
+                tokio::spawn(async move {
+                    let mut mine = Vec::new();
+                    while let Some(job) = store.claim(&format!("w{w}"), 60_000).await.unwrap() {
+                        mine.push(job.id);
+                    }
+                    mine
+                })
+            });
+            let mut claimed: Vec<String> = Vec::new();
+            for claimer in claimers.collect::<Vec<_>>() {
+                claimed.extend(claimer.await.unwrap());
+            }
+            claimed.sort();
+            let expected: Vec<String> = (0..20).map(|i| format!("j{i:02}")).collect();
+            assert_eq!(claimed, expected, "{name}");
+        }
+    }
+
+    /// A worker that lost its lease cannot complete: the job belongs to the one that took it up.
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_lost_lease_discards_the_stale_result() {
+        for (name, store) in testing::stores().await {
+            queue(&store, "j").await;
+            store.claim("stale", 1).await.unwrap().unwrap();
+            tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+            let again = store.claim("fresh", 60_000).await.unwrap().expect("an expired lease is taken up");
+            assert_eq!(again.attempts, 2, "{name}");
+            assert_eq!(store.heartbeat("j", "stale", 60_000, None).await.unwrap(), None, "{name}");
+            assert!(!store.complete("j", "stale", "m-stale", "p", "{}").await.unwrap(), "{name}");
+            assert!(!store.finish("j", "stale", "failed", Some("x"), None).await.unwrap(), "{name}");
+            assert!(store.complete("j", "fresh", "m-fresh", "p", "{}").await.unwrap(), "{name}");
+            let ids: Vec<String> = store.metamodels(10, 0).await.unwrap().into_iter().map(|m| m.id).collect();
+            assert_eq!(ids, vec!["m-fresh".to_string()], "{name}: completed twice");
+        }
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn a_job_whose_worker_keeps_dying_fails_with_the_reason() {
+        for (name, store) in testing::stores().await {
+            queue(&store, "j").await;
+            for attempt in 1..=MAX_ATTEMPTS {
+                let job = store.claim("w", 1).await.unwrap().expect("taken up again");
+                assert_eq!(job.attempts, attempt, "{name}");
+                tokio::time::sleep(std::time::Duration::from_millis(5)).await;
+            }
+            assert!(store.claim("w", 1).await.unwrap().is_none(), "{name}: retried without bound");
+            let job = store.job("j").await.unwrap().unwrap();
+            assert_eq!(job.state, "failed", "{name}");
+            assert!(job.error.unwrap().contains("3 times"), "{name}");
+        }
+    }
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn cancel_release_idempotency_and_a_full_queue() {
+        for (name, store) in testing::stores().await {
+            queue(&store, "queued").await;
+            let cancelled = store.request_cancel("queued").await.unwrap().unwrap();
+            assert_eq!(cancelled.state, "cancelled", "{name}");
+            queue(&store, "running").await;
+            store.claim("w", 60_000).await.unwrap().unwrap();
+            store.request_cancel("running").await.unwrap();
+            assert_eq!(store.heartbeat("running", "w", 60_000, None).await.unwrap(), Some(true), "{name}");
+            store.release("running", "w").await.unwrap();
+            assert_eq!(store.job("running").await.unwrap().unwrap().state, "queued", "{name}");
+
+            let key = Some(("k", "calibrations"));
+            assert_eq!(store.insert_job("a", "calibration", "{}", key, 100).await.unwrap(), Enqueued::New);
+            let replay = store.insert_job("b", "calibration", "{}", key, 100).await.unwrap();
+            assert_eq!(replay, Enqueued::Earlier { id: "a".into(), request: "{}".into() }, "{name}");
+            // Two queued now ("running" was released, "a"): a queue of two is full, a replay still answers.
+            assert_eq!(store.insert_job("c", "calibration", "{}", None, 2).await.unwrap(), Enqueued::QueueFull);
+            assert!(matches!(
+                store.insert_job("d", "calibration", "{}", key, 2).await.unwrap(),
+                Enqueued::Earlier { .. }
+            ));
+            assert!(store.job("c").await.unwrap().is_none() && store.ping().await, "{name}");
+        }
     }
 }

@@ -11,8 +11,8 @@ mod telemetry;
 
 pub use openapi::openapi;
 
-use super::AppState;
 use super::error::ApiError;
+use super::{AppState, Role};
 use crate::service::store::Enqueued;
 use axum::Router;
 use axum::extract::rejection::{JsonRejection, QueryRejection};
@@ -38,7 +38,11 @@ fn documented() -> OpenApiRouter<AppState> {
 
 pub fn router(state: AppState) -> Router {
     let limit = state.config.max_body_bytes;
-    let (routes, mut spec) = documented().split_for_parts();
+    let served = match state.config.role {
+        Role::All | Role::Api => documented(),
+        Role::Worker => OpenApiRouter::with_openapi(openapi::base()).merge(health::router()).merge(telemetry::router()),
+    };
+    let (routes, mut spec) = served.split_for_parts();
     openapi::add_shared_responses(&mut spec);
     let spec = Arc::new(spec.to_pretty_json().expect("the OpenAPI document serialises"));
     let mut app = routes

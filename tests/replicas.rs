@@ -1,0 +1,158 @@
+//! Several `windmeta serve` processes on one PostgreSQL database: they share the job queue, a
+//! replica killed in the middle of a job loses it to another that finishes it, and no job completes
+//! twice. Skipped, with the reason printed, where no PostgreSQL is reachable.
+
+use serde_json::{Value, json};
+use sqlx::Row;
+use std::io::{BufRead, BufReader};
+use std::process::{Child, Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+use windmeta::service::testing::fresh_postgres;
+
+struct Replica {
+    child: Child,
+    address: String,
+}
+
+impl Replica {
+    /// Starts the real binary and waits for the address it reports in its log.
+    fn start(database_url: &str, role: &str) -> Replica {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_windmeta"))
+            .arg("serve")
+            .env("WINDMETA_LISTEN", "127.0.0.1:0")
+            .env("DATABASE_URL", database_url)
+            .env("WINDMETA_ROLE", role)
+            .env("WINDMETA_WORKERS", "1")
+            .env("WINDMETA_LEASE_MS", "3000")
+            .env("NO_COLOR", "1")
+            .env("RUST_LOG", "info")
+            .stdout(Stdio::piped())
+            .stderr(Stdio::inherit())
+            .spawn()
+            .expect("the binary starts");
+        let stdout = child.stdout.take().unwrap();
+        let (found, address) = mpsc::channel();
+        std::thread::spawn(move || {
+            for line in BufReader::new(stdout).lines().map_while(Result::ok) {
+                if let Some(rest) = line.split("address=").nth(1) {
+                    let address: String =
+                        rest.chars().take_while(|c| c.is_ascii_digit() || *c == '.' || *c == ':').collect();
+                    let _ = found.send(address);
+                }
+            }
+        });
+        let address = address.recv_timeout(Duration::from_secs(60)).expect("the replica reports its address");
+        Replica { child, address: format!("http://{address}") }
+    }
+
+    fn pid(&self) -> u32 {
+        self.child.id()
+    }
+}
+
+impl Drop for Replica {
+    fn drop(&mut self) {
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+    }
+}
+
+async fn operation(client: &reqwest::Client, replica: &Replica, id: &str) -> Value {
+    client.get(format!("{}/v1/operations/{id}", replica.address)).send().await.unwrap().json().await.unwrap()
+}
+
+/// (job id, lease owner) of the running jobs.
+async fn running(pool: &sqlx::AnyPool) -> Vec<(String, String)> {
+    let rows = sqlx::query("SELECT id, lease_owner FROM jobs WHERE state = 'running'").fetch_all(pool).await.unwrap();
+    rows.iter().map(|r| (r.get("id"), r.get("lease_owner"))).collect()
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn replicas_share_jobs_and_survive_a_killed_one() {
+    let Some(url) = fresh_postgres().await else { return };
+    let pool = sqlx::AnyPool::connect(&url).await.unwrap();
+    let first = Replica::start(&url, "all");
+    let second = Replica::start(&url, "all");
+    let client = reqwest::Client::new();
+
+    // Two calibrations posted to one replica: each replica (one worker each) runs one of them.
+    let mut ids = Vec::new();
+    for seed in [1, 2] {
+        let body = json!({"experiments": 40, "duration_s": 300, "seed": seed});
+        let r = client.post(format!("{}/v1/calibrations", first.address)).json(&body).send().await.unwrap();
+        assert_eq!(r.status().as_u16(), 202);
+        ids.push(r.json::<Value>().await.unwrap()["id"].as_str().unwrap().to_string());
+    }
+    let started = Instant::now();
+    let owners = loop {
+        let jobs = running(&pool).await;
+        if jobs.len() == 2 {
+            break jobs;
+        }
+        assert!(started.elapsed() < Duration::from_secs(60), "both jobs never ran at once: {jobs:?}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    };
+    let pid_of = |owner: &str| owner.split("-pid").nth(1).and_then(|p| p.split('-').next()).unwrap().to_string();
+    let mut pids: Vec<String> = owners.iter().map(|(_, owner)| pid_of(owner)).collect();
+    pids.sort();
+    let mut expected = vec![first.pid().to_string(), second.pid().to_string()];
+    expected.sort();
+    assert_eq!(pids, expected, "each replica runs one job");
+
+    // Kill the first replica (no graceful release): its job's lease runs out and the second takes it up.
+    let (orphan, _) = owners.iter().find(|(_, owner)| pid_of(owner) == first.pid().to_string()).unwrap().clone();
+    drop(first);
+    let started = Instant::now();
+    for id in &ids {
+        loop {
+            let op = operation(&client, &second, id).await;
+            if op["done"] == true {
+                assert_eq!(op["state"], "succeeded", "{op}");
+                break;
+            }
+            assert!(started.elapsed() < Duration::from_secs(300), "stuck: {op}");
+            tokio::time::sleep(Duration::from_millis(250)).await;
+        }
+    }
+    let orphan_op = operation(&client, &second, &orphan).await;
+    assert_eq!(orphan_op["attempts"], 2, "taken up again once: {orphan_op}");
+    for id in &ids {
+        let stored: i64 = sqlx::query("SELECT COUNT(*) AS n FROM metamodels WHERE job_id = $1")
+            .bind(id)
+            .fetch_one(&pool)
+            .await
+            .unwrap()
+            .get("n");
+        assert_eq!(stored, 1, "job {id} completed {stored} times");
+    }
+}
+
+/// An API-only replica queues work and serves it; a worker-only replica runs it and serves only
+/// health and metrics.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn api_and_worker_roles_split_the_work() {
+    let Some(url) = fresh_postgres().await else { return };
+    let api = Replica::start(&url, "api");
+    let client = reqwest::Client::new();
+    let body = json!({"experiments": 8, "duration_s": 30, "seed": 3});
+    let r = client.post(format!("{}/v1/calibrations", api.address)).json(&body).send().await.unwrap();
+    let id = r.json::<Value>().await.unwrap()["id"].as_str().unwrap().to_string();
+    tokio::time::sleep(Duration::from_millis(1500)).await;
+    assert_eq!(operation(&client, &api, &id).await["state"], "queued", "an API replica runs nothing");
+    let worker = Replica::start(&url, "worker");
+    let health = client.get(format!("{}/readyz", worker.address)).send().await.unwrap();
+    assert_eq!(health.status().as_u16(), 200);
+    let v1 = client.get(format!("{}/v1/presets", worker.address)).send().await.unwrap();
+    assert_eq!(v1.status().as_u16(), 404, "a worker replica serves no API");
+    let started = Instant::now();
+    loop {
+        let op = operation(&client, &api, &id).await;
+        if op["done"] == true {
+            assert_eq!(op["state"], "succeeded", "{op}");
+            break;
+        }
+        assert!(started.elapsed() < Duration::from_secs(120), "stuck: {op}");
+        tokio::time::sleep(Duration::from_millis(250)).await;
+    }
+}
