@@ -5,7 +5,9 @@ use serde_json::{Value, json};
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 use tokio::sync::oneshot;
+use windmeta::problem::{Problem, ProblemSpec};
 use windmeta::service::{Application, Role, ServeArgs};
+use windmeta::surrogate::{CalibrationOptions, Silent, calibrate};
 
 struct TestApp {
     address: String,
@@ -140,7 +142,7 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(app.get("/v1/presets/frame40").await.1["floors"], 40);
 
     let response = app
-        .post("/v1/calibrations", json!({"preset": "frame40-kn", "experiments": 8, "duration_s": 30, "seed": 3}))
+        .post("/v1/calibrations", json!({"preset": "frame40-kn", "experiments": 32, "duration_s": 30, "seed": 3}))
         .await;
     assert_eq!(response.status().as_u16(), 202);
     let location = response.headers()["location"].to_str().unwrap().to_string();
@@ -159,6 +161,12 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(status, 200);
     assert_eq!(metamodel["format"], "windmeta-pc-narx");
     assert_eq!(metamodel["models"].as_array().unwrap().len(), 3);
+    // The experiments beyond the 20 selection ones ran as tasks; the metamodel is bit for bit the
+    // one the same calibration gives in one process.
+    let spec = ProblemSpec { preset: Some("frame40-kn".into()), duration_s: Some(30.0), ..ProblemSpec::default() };
+    let options = CalibrationOptions { experiments: 32, seed: 3, ..CalibrationOptions::default() };
+    let local = calibrate(&Problem::from_spec(&spec).unwrap(), &options, &Silent).unwrap();
+    assert_eq!(metamodel["models"], serde_json::to_value(&local.models).unwrap());
     assert_eq!(app.get("/v1/metamodels").await.1["metamodels"][0]["id"], id.as_str());
 
     let path = format!("/v1/metamodels/{id}/exceedance");
@@ -494,7 +502,7 @@ async fn drain_operations(app: &TestApp) {
     panic!("operations did not stop");
 }
 
-async fn calibrate(app: &TestApp, body: Value) -> (String, String) {
+async fn calibrate_over_http(app: &TestApp, body: Value) -> (String, String) {
     let url = format!("{}/v1/calibrations", app.address);
     let op: Value = app.client.post(url).bearer_auth(KEY).json(&body).send().await.unwrap().json().await.unwrap();
     let id = op["id"].as_str().unwrap().to_string();
@@ -524,8 +532,9 @@ async fn every_documented_status_is_real() {
     let spec: Value =
         app.client.get(format!("{}/openapi.json", app.address)).send().await.unwrap().json().await.unwrap();
     assert_eq!(spec, serde_json::to_value(windmeta::service::openapi()).unwrap(), "/openapi.json is the contract");
-    let (operation, metamodel) = calibrate(&app, json!({"experiments": 8, "duration_s": 30, "seed": 3})).await;
-    let (_, doomed_metamodel) = calibrate(&app, json!({"experiments": 4, "duration_s": 10})).await;
+    let (operation, metamodel) =
+        calibrate_over_http(&app, json!({"experiments": 8, "duration_s": 30, "seed": 3})).await;
+    let (_, doomed_metamodel) = calibrate_over_http(&app, json!({"experiments": 4, "duration_s": 10})).await;
     let ids = Ids { metamodel, doomed_metamodel, operation };
     let documented = documented_statuses(&spec);
     eprintln!("provoking {} documented (operation, status) pairs", documented.len());

@@ -156,3 +156,35 @@ async fn api_and_worker_roles_split_the_work() {
         tokio::time::sleep(Duration::from_millis(250)).await;
     }
 }
+
+/// One calibration's experiments are spread over the replicas: both run some of its tasks.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn one_calibration_is_spread_over_replicas() {
+    let Some(url) = fresh_postgres().await else { return };
+    let pool = sqlx::AnyPool::connect(&url).await.unwrap();
+    let first = Replica::start(&url, "all");
+    let second = Replica::start(&url, "all");
+    let client = reqwest::Client::new();
+    let body = json!({"experiments": 100, "duration_s": 300, "seed": 4});
+    let r = client.post(format!("{}/v1/calibrations", first.address)).json(&body).send().await.unwrap();
+    let id = r.json::<Value>().await.unwrap()["id"].as_str().unwrap().to_string();
+    let mut task_owners = std::collections::BTreeSet::new();
+    let started = Instant::now();
+    loop {
+        let rows = sqlx::query("SELECT lease_owner FROM tasks WHERE state = 'running'").fetch_all(&pool).await.unwrap();
+        for row in rows {
+            let owner: String = row.get("lease_owner");
+            task_owners.insert(owner.split("-pid").nth(1).unwrap().split('-').next().unwrap().to_string());
+        }
+        let op = operation(&client, &second, &id).await;
+        if op["done"] == true {
+            assert_eq!(op["state"], "succeeded", "{op}");
+            break;
+        }
+        assert!(started.elapsed() < Duration::from_secs(300), "stuck: {op}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+    let mut expected = std::collections::BTreeSet::new();
+    expected.extend([first.pid().to_string(), second.pid().to_string()]);
+    assert_eq!(task_owners, expected, "both replicas ran experiments of the one calibration");
+}

@@ -51,9 +51,6 @@ impl Observer for Terminal {
                 format!("experiments {done}/{total}")
             }
             Progress::Structure { mode } => format!("mode {mode}: structure selection"),
-            Progress::Coefficients { mode, done, total } if done == total => {
-                format!("mode {mode}: coefficients of {total} experiments")
-            }
             Progress::Expansion { mode } => format!("mode {mode}: polynomial chaos expansions"),
             _ => return,
         };

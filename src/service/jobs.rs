@@ -1,25 +1,38 @@
-//! The job workers (calibrations, validations): each claims a job from the lease table, runs it on
-//! a blocking thread (the numerical core parallelises with rayon there, never on the async
-//! runtime), renews the lease and saves progress every second, and stores the metamodel (or the
-//! report) with the job's completion, guarded by the lease. A worker that dies loses its lease and
-//! the job is taken up again.
+//! The job workers. Each claims work from the lease tables, runs the numerical part on a blocking
+//! thread (the core parallelises with rayon there, never on the async runtime), renews its lease
+//! and saves progress every second, and stores the outcome guarded by the lease. A worker that dies
+//! loses its lease and the work is taken up again.
+//!
+//! A calibration is spread over the replicas: its worker plans it (selection experiments, scales,
+//! structures), queues the other experiments as tasks in chunks, works on them itself, and
+//! assembles the metamodel when every chunk is done. Idle workers of any replica take tasks before
+//! new jobs. Validations and exceedance requests run whole on the worker that claimed them.
 
 use super::exceedance::{ExceedanceAnswer, ExceedanceJob};
-use super::store::Store;
+use super::store::{Store, TaskRow};
 use super::{AppState, CalibrationRequest, ValidationJob};
 use crate::analysis::{ValidationReport, validate};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::surrogate::{CalibrationOptions, Metamodel, Observer, Progress, calibrate};
+use crate::surrogate::phases::{CalibrationPlan, ExperimentFit, assemble, fit_experiments, plan};
+use crate::surrogate::{CalibrationOptions, Metamodel, Observer, Progress, Silent, StageSeconds};
+use serde::{Deserialize, Serialize};
+use std::future::Future;
+use std::pin::Pin;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
-use std::time::Duration;
+use std::time::{Duration, Instant};
+
+/// Experiments per task: large enough that a task's overhead (rebuilding the study, a lease) is
+/// small against its work, small enough that a full-size calibration has tasks for every replica.
+const EXPERIMENTS_PER_TASK: usize = 10;
 
 /// What the blocking work shares with its async supervisor.
+#[derive(Default)]
 struct Shared {
     /// Latest progress, saved at the next heartbeat.
     progress: Mutex<Option<Progress>>,
-    /// Set by the supervisor on a cancel request or shutdown; read by the calibration between steps.
+    /// Set by the supervisor on a cancel request or shutdown; read by the work between steps.
     cancel: AtomicBool,
 }
 
@@ -32,12 +45,6 @@ impl Observer for Shared {
     }
 }
 
-/// Who holds a lease, for people reading the jobs table: host and process id.
-fn replica_name() -> String {
-    let host = std::env::var("HOSTNAME").unwrap_or_else(|_| "host".into());
-    format!("{host}-pid{}", std::process::id())
-}
-
 /// Runs `count` workers until shutdown.
 pub fn spawn_workers(state: AppState, count: usize) -> Vec<tokio::task::JoinHandle<()>> {
     (0..count)
@@ -48,10 +55,24 @@ pub fn spawn_workers(state: AppState, count: usize) -> Vec<tokio::task::JoinHand
         .collect()
 }
 
+/// Who holds a lease, for people reading the tables: host and process id.
+fn replica_name() -> String {
+    let host = std::env::var("HOSTNAME").unwrap_or_else(|_| "host".into());
+    format!("{host}-pid{}", std::process::id())
+}
+
 async fn worker(state: AppState) {
     let owner = format!("{}-{}", replica_name(), uuid::Uuid::new_v4().simple());
     while !state.draining.load(Ordering::Relaxed) {
-        match state.store.claim(&owner, state.config.lease_ms).await {
+        let claimed = match state.store.claim_task(&owner, state.config.lease_ms, None).await {
+            Ok(Some(task)) => {
+                run_task(&state, &owner, task, None).await;
+                continue;
+            }
+            Ok(None) => state.store.claim(&owner, state.config.lease_ms).await,
+            Err(error) => Err(error),
+        };
+        match claimed {
             Ok(Some(job)) => run(&state, &owner, job.id, &job.kind, job.request).await,
             Ok(None) => {
                 tokio::select! {
@@ -60,25 +81,79 @@ async fn worker(state: AppState) {
                 }
             }
             Err(error) => {
-                tracing::error!(%error, "claiming a job failed");
+                tracing::error!(%error, "claiming work failed");
                 tokio::time::sleep(Duration::from_secs(1)).await;
             }
         }
     }
 }
 
-/// What a job computes, ready to run on a blocking thread.
-enum Work {
-    Calibration(Box<Problem>, CalibrationOptions),
-    Validation(Box<(Metamodel, Problem)>, usize, u64),
-    Exceedance(Box<(Metamodel, Problem)>, Box<ExceedanceJob>),
+/// A chunk of a calibration's experiments, as queued.
+#[derive(Debug, Serialize, Deserialize)]
+struct TaskRequest {
+    calibration: CalibrationRequest,
+    plan: CalibrationPlan,
+    experiments: Vec<usize>,
 }
 
-/// What it produced.
+/// Runs a task with its own lease; `parent` is the coordinating job's cancel flag when the
+/// coordinator runs it itself.
+async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&Shared>) {
+    let store = &state.store;
+    let (job_id, chunk) = (task.job_id.clone(), task.chunk);
+    let shared = Arc::new(Shared::default());
+    let observer = shared.clone();
+    let config = state.config.clone();
+    let mut work = tokio::task::spawn_blocking(move || -> Result<Vec<ExperimentFit>> {
+        let request: TaskRequest =
+            serde_json::from_str(&task.request).map_err(|e| Error::invalid("task", e.to_string()))?;
+        let (problem, options) = request.calibration.resolve(&config)?;
+        fit_experiments(&problem, &options, &request.plan, &request.experiments, 0, observer.as_ref())
+    });
+    let mut ticker = tokio::time::interval(Duration::from_secs(1));
+    let result = loop {
+        tokio::select! {
+            result = &mut work => break result,
+            _ = ticker.tick() => {
+                let wanted = store.heartbeat_task(&job_id, chunk, owner, state.config.lease_ms).await;
+                let stop = !matches!(wanted, Ok(Some(true)) | Err(_))
+                    || state.draining.load(Ordering::Relaxed)
+                    || parent.is_some_and(|p| p.cancelled());
+                if stop {
+                    shared.cancel.store(true, Ordering::Relaxed);
+                }
+            }
+        }
+    };
+    let recorded = match result {
+        Ok(Ok(fits)) => {
+            let text = serde_json::to_string(&fits).expect("fits serialise");
+            store.finish_task(&job_id, chunk, owner, "done", &text).await.map(|_| ())
+        }
+        Ok(Err(Error::Cancelled)) => store.release_task(&job_id, chunk, owner).await,
+        Ok(Err(error)) => store.finish_task(&job_id, chunk, owner, "failed", &error.to_string()).await.map(|_| ()),
+        Err(panic) => {
+            let reason = format!("the task panicked: {panic}");
+            store.finish_task(&job_id, chunk, owner, "failed", &reason).await.map(|_| ())
+        }
+    };
+    if let Err(error) = recorded {
+        tracing::error!(%error, job = %job_id, chunk, "recording a task failed");
+    }
+}
+
+/// What a job produced.
 enum Output {
     Metamodel(Box<Metamodel>),
     Report(Box<ValidationReport>),
     Curve(Box<ExceedanceAnswer>),
+}
+
+type WorkFuture = Pin<Box<dyn Future<Output = Result<(Output, String)>> + Send>>;
+
+/// A blocking computation as a future; a panic becomes an error.
+async fn blocking<T: Send + 'static>(work: impl FnOnce() -> Result<T> + Send + 'static) -> Result<T> {
+    tokio::task::spawn_blocking(work).await.map_err(|panic| Error::Numerical(format!("the job panicked: {panic}")))?
 }
 
 /// A stored metamodel and its study, for jobs that sample it.
@@ -93,34 +168,115 @@ async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Problem
     Ok((metamodel, problem))
 }
 
-/// Reads a job's request into its work; the metamodel of a validation comes from the store.
-async fn prepare(store: &Store, kind: &str, request: &str, config: &super::ServeArgs) -> Result<Work> {
+fn parse<T: serde::de::DeserializeOwned>(request: &str) -> Result<T> {
+    serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))
+}
+
+/// Reads a job's request into the work that answers it.
+async fn prepare(
+    state: &AppState,
+    id: &str,
+    owner: &str,
+    kind: &str,
+    request: &str,
+    shared: Arc<Shared>,
+) -> Result<WorkFuture> {
     match kind {
         "calibration" => {
-            let request: CalibrationRequest =
-                serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))?;
-            let (problem, options) = request.resolve(config)?;
-            Ok(Work::Calibration(Box::new(problem), options))
+            let request: CalibrationRequest = parse(request)?;
+            let (problem, options) = request.resolve(&state.config)?;
+            let work = coordinate(state.clone(), id.to_string(), owner.to_string(), request, problem, options, shared);
+            Ok(Box::pin(work))
         }
         "validation" => {
-            let request: ValidationJob =
-                serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))?;
-            let loaded = stored_metamodel(store, &request.metamodel_id).await?;
-            Ok(Work::Validation(Box::new(loaded), request.samples, request.seed))
+            let job: ValidationJob = parse(request)?;
+            let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            Ok(Box::pin(blocking(move || {
+                let report = validate(&metamodel, &problem, job.samples, job.seed, shared.as_ref())?;
+                Ok((Output::Report(Box::new(report)), problem.name))
+            })))
         }
         "exceedance" => {
-            let job: ExceedanceJob =
-                serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))?;
-            let loaded = stored_metamodel(store, &job.metamodel_id).await?;
-            Ok(Work::Exceedance(Box::new(loaded), Box::new(job)))
+            let job: ExceedanceJob = parse(request)?;
+            let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            Ok(Box::pin(blocking(move || {
+                let answer = job.request.answer(&metamodel, &problem, &job.metamodel_id, shared.as_ref())?;
+                Ok((Output::Curve(Box::new(answer)), problem.name))
+            })))
         }
         other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
     }
 }
 
+/// A calibration spread over the replicas (see the module's description).
+async fn coordinate(
+    state: AppState,
+    id: String,
+    owner: String,
+    request: CalibrationRequest,
+    problem: Problem,
+    options: CalibrationOptions,
+    shared: Arc<Shared>,
+) -> Result<(Output, String)> {
+    let database = |e: sqlx::Error| Error::Numerical(format!("database: {e}"));
+    let problem = Arc::new(problem);
+    let options = Arc::new(options);
+    let planned = {
+        let (problem, options, shared) = (problem.clone(), options.clone(), shared.clone());
+        Arc::new(blocking(move || plan(&problem, &options, shared.as_ref())).await?)
+    };
+    let started = Instant::now();
+    let remaining = planned.plan.remaining();
+    let tasks: Vec<String> = remaining
+        .chunks(EXPERIMENTS_PER_TASK)
+        .map(|experiments| {
+            let task = TaskRequest {
+                calibration: request.clone(),
+                plan: planned.plan.clone(),
+                experiments: experiments.to_vec(),
+            };
+            serde_json::to_string(&task).expect("a task serialises")
+        })
+        .collect();
+    state.store.insert_tasks(&id, &tasks).await.map_err(database)?;
+    state.wake.notify_waiters();
+    let mut fits = {
+        let (planned, options, shared) = (planned.clone(), options.clone(), shared.clone());
+        blocking(move || planned.fit_selection(&options, shared.as_ref())).await?
+    };
+    let total = planned.plan.design.len();
+    loop {
+        if shared.cancelled() {
+            return Err(Error::Cancelled);
+        }
+        let tally = state.store.task_tally(&id).await.map_err(database)?;
+        if let Some(reason) = tally.failure {
+            return Err(Error::Numerical(reason));
+        }
+        let done = fits.len() + (tally.done as usize * EXPERIMENTS_PER_TASK).min(remaining.len());
+        shared.progress(Progress::Experiments { done, total });
+        if tally.done == tally.total {
+            break;
+        }
+        match state.store.claim_task(&owner, state.config.lease_ms, Some(&id)).await.map_err(database)? {
+            Some(task) => run_task(&state, &owner, task, Some(&shared)).await,
+            None => tokio::time::sleep(Duration::from_millis(250)).await,
+        }
+    }
+    for text in state.store.task_results(&id).await.map_err(database)? {
+        let chunk: Vec<ExperimentFit> = serde_json::from_str(&text).map_err(|e| Error::Numerical(e.to_string()))?;
+        fits.extend(chunk);
+    }
+    let seconds = StageSeconds { coefficients: started.elapsed().as_secs_f64(), ..planned.seconds.clone() };
+    let name = problem.name.clone();
+    let metamodel = blocking(move || assemble(&problem, &options, &planned, fits, seconds, &Silent)).await?;
+    Ok((Output::Metamodel(Box::new(metamodel)), name))
+}
+
 async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: String) {
     let store: &Store = &state.store;
-    let work = match prepare(store, kind, &request, &state.config).await {
+    let shared = Arc::new(Shared::default());
+    let mut work = match prepare(state, &id, owner, kind, &request, shared.clone()).await {
         Ok(work) => work,
         Err(error) => {
             let _ = store.finish(&id, owner, "failed", Some(&error.to_string()), None).await;
@@ -128,29 +284,10 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         }
     };
     tracing::info!(job = %id, kind, "job started");
-    let shared = Arc::new(Shared { progress: Mutex::new(None), cancel: AtomicBool::new(false) });
-    let observer = shared.clone();
-    let mut task = tokio::task::spawn_blocking(move || match work {
-        Work::Calibration(problem, options) => {
-            let name = problem.name.clone();
-            calibrate(&problem, &options, observer.as_ref()).map(|m| (Output::Metamodel(Box::new(m)), name))
-        }
-        Work::Validation(loaded, samples, seed) => {
-            let (metamodel, problem) = *loaded;
-            validate(&metamodel, &problem, samples, seed, observer.as_ref())
-                .map(|r| (Output::Report(Box::new(r)), problem.name))
-        }
-        Work::Exceedance(loaded, job) => {
-            let (metamodel, problem) = *loaded;
-            job.request
-                .answer(&metamodel, &problem, &job.metamodel_id, observer.as_ref())
-                .map(|a| (Output::Curve(Box::new(a)), problem.name))
-        }
-    });
     let mut ticker = tokio::time::interval(Duration::from_secs(1));
     let result = loop {
         tokio::select! {
-            result = &mut task => break result,
+            result = &mut work => break result,
             _ = ticker.tick() => {
                 let progress = shared.progress.lock().expect("progress lock").clone();
                 let text = progress.map(|p| serde_json::to_string(&p).expect("progress serialises"));
@@ -166,25 +303,22 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         }
     };
     let outcome = match result {
-        Ok(Ok((Output::Metamodel(metamodel), preset))) => {
+        Ok((Output::Metamodel(metamodel), preset)) => {
             let metamodel_id = uuid::Uuid::new_v4().to_string();
             let body = serde_json::to_string(&metamodel).expect("a metamodel serialises");
             store.complete(&id, owner, &metamodel_id, &preset, &body).await.map(|_| ())
         }
-        Ok(Ok((Output::Report(report), _))) => {
+        Ok((Output::Report(report), _)) => {
             let body = serde_json::to_string(&report).expect("a report serialises");
             store.finish(&id, owner, "succeeded", None, Some(&body)).await.map(|_| ())
         }
-        Ok(Ok((Output::Curve(curve), _))) => {
+        Ok((Output::Curve(curve), _)) => {
             let body = serde_json::to_string(&curve).expect("a curve serialises");
             store.finish(&id, owner, "succeeded", None, Some(&body)).await.map(|_| ())
         }
-        Ok(Err(Error::Cancelled)) if state.draining.load(Ordering::Relaxed) => store.release(&id, owner).await,
-        Ok(Err(Error::Cancelled)) => store.finish(&id, owner, "cancelled", None, None).await.map(|_| ()),
-        Ok(Err(error)) => store.finish(&id, owner, "failed", Some(&error.to_string()), None).await.map(|_| ()),
-        Err(panic) => {
-            store.finish(&id, owner, "failed", Some(&format!("the job panicked: {panic}")), None).await.map(|_| ())
-        }
+        Err(Error::Cancelled) if state.draining.load(Ordering::Relaxed) => store.release(&id, owner).await,
+        Err(Error::Cancelled) => store.finish(&id, owner, "cancelled", None, None).await.map(|_| ()),
+        Err(error) => store.finish(&id, owner, "failed", Some(&error.to_string()), None).await.map(|_| ()),
     };
     if let Err(error) = outcome {
         tracing::error!(%error, job = %id, "recording the outcome failed");

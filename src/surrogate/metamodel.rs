@@ -71,11 +71,17 @@ pub struct CalibrationSummary {
     pub seconds: StageSeconds,
 }
 
+/// Wall time of each stage (s). With the experiments spread over several replicas, the
+/// coefficients stage is the fan-out's wall time.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct StageSeconds {
+    /// The selection experiments through the reference.
     pub experiments: f64,
+    /// Structure selection on them.
     pub structure: f64,
+    /// Every other experiment through the reference, and every experiment's NARX fit.
     pub coefficients: f64,
+    /// Polynomial chaos expansions and diagnostics.
     pub expansion: f64,
     pub total: f64,
 }

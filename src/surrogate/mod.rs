@@ -8,6 +8,7 @@ mod metamodel;
 pub mod narx;
 mod parametrization;
 pub mod pce;
+pub mod phases;
 
 pub use calibrate::{CalibrationOptions, MAX_EXPERIMENTS, ModeDiagnostics, Observer, Progress, Silent, calibrate};
 pub use identify::Refinement;

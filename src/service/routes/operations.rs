@@ -185,14 +185,20 @@ async fn operation_events(
                 return None;
             }
             loop {
-                let row = state.store.job(&id).await.ok().flatten()?;
-                let value = operation(&row).ok()?;
-                let text = serde_json::to_string(&value).expect("an operation serialises");
-                if last.as_deref() != Some(text.as_str()) {
-                    return Some((
-                        Ok(Event::default().event("operation").data(text.clone())),
-                        (state, id, Some(text), value.done),
-                    ));
+                // A failed read (a busy database) is retried; a deleted operation ends the stream.
+                let value = match state.store.job(&id).await {
+                    Ok(None) => return None,
+                    Ok(Some(row)) => operation(&row).ok(),
+                    Err(_) => None,
+                };
+                if let Some(value) = value {
+                    let text = serde_json::to_string(&value).expect("an operation serialises");
+                    if last.as_deref() != Some(text.as_str()) {
+                        return Some((
+                            Ok(Event::default().event("operation").data(text.clone())),
+                            (state, id, Some(text), value.done),
+                        ));
+                    }
                 }
                 tokio::time::sleep(Duration::from_millis(500)).await;
             }

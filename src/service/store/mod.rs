@@ -4,6 +4,10 @@
 //! claim: PostgreSQL skips rows another replica is claiming (`FOR UPDATE SKIP LOCKED`); SQLite
 //! has one writer at a time, so its plain claim cannot hand one job to two workers.
 
+mod tasks;
+
+pub use tasks::TaskRow;
+
 use sqlx::any::{AnyPoolOptions, install_default_drivers};
 use sqlx::{AnyPool, Row};
 use std::time::{SystemTime, UNIX_EPOCH};
@@ -200,6 +204,10 @@ impl Store {
         .bind(MAX_ATTEMPTS)
         .execute(&self.pool)
         .await?;
+        // The pieces of ended jobs are of no further use.
+        sqlx::query("DELETE FROM tasks WHERE job_id IN (SELECT id FROM jobs WHERE state IN ('succeeded', 'failed', 'cancelled'))")
+            .execute(&self.pool)
+            .await?;
         let query = match self.backend {
             Backend::Sqlite => concat!(
                 "UPDATE jobs SET state = 'running', lease_owner = $1, lease_until = $2, attempts = attempts + 1, ",
@@ -557,6 +565,40 @@ mod tests {
                 Enqueued::Earlier { .. }
             ));
             assert!(store.job("c").await.unwrap().is_none() && store.ping().await, "{name}");
+        }
+    }
+
+    use tasks::TaskTally;
+
+    #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+    async fn tasks_of_a_running_job_are_shared_and_tallied() {
+        for (name, store) in testing::stores().await {
+            queue(&store, "j").await;
+            let requests = ["a".to_string(), "b".to_string()];
+            store.insert_tasks("j", &requests).await.unwrap();
+            assert!(store.claim_task("w1", 60_000, None).await.unwrap().is_none(), "{name}: the job is not running");
+            store.claim("coordinator", 60_000).await.unwrap().unwrap();
+            let first = store.claim_task("w1", 60_000, None).await.unwrap().unwrap();
+            let second = store.claim_task("w2", 60_000, Some("j")).await.unwrap().unwrap();
+            assert_eq!((first.chunk, first.request.as_str(), second.chunk), (0, "a", 1), "{name}");
+            assert!(store.claim_task("w3", 60_000, None).await.unwrap().is_none(), "{name}: handed out twice");
+            assert_eq!(store.heartbeat_task("j", 0, "w1", 60_000).await.unwrap(), Some(true), "{name}");
+            assert_eq!(store.heartbeat_task("j", 0, "w2", 60_000).await.unwrap(), None, "{name}: not w2's");
+            assert!(!store.finish_task("j", 0, "w2", "done", "stolen").await.unwrap(), "{name}");
+            assert!(store.finish_task("j", 0, "w1", "done", "r0").await.unwrap(), "{name}");
+            assert!(store.finish_task("j", 1, "w2", "failed", "boom").await.unwrap(), "{name}");
+            let tally = store.task_tally("j").await.unwrap();
+            assert_eq!(tally, TaskTally { total: 2, done: 1, failure: Some("boom".into()) }, "{name}");
+            assert_eq!(store.task_results("j").await.unwrap(), vec!["r0".to_string()], "{name}");
+            // A second attempt at the job: an unchanged chunk keeps its output, a changed one restarts.
+            store.insert_tasks("j", &["a".to_string(), "b2".to_string()]).await.unwrap();
+            assert_eq!(store.task_tally("j").await.unwrap(), TaskTally { total: 2, done: 1, failure: None });
+            // Cancelling the job withdraws its tasks from idle workers and from the one running them.
+            let again = store.claim_task("w1", 60_000, None).await.unwrap().unwrap();
+            store.request_cancel("j").await.unwrap();
+            assert_eq!(store.heartbeat_task("j", again.chunk, "w1", 60_000).await.unwrap(), Some(false), "{name}");
+            store.release_task("j", again.chunk, "w1").await.unwrap();
+            assert!(store.claim_task("w1", 60_000, None).await.unwrap().is_none(), "{name}");
         }
     }
 }

@@ -1,0 +1,347 @@
+//! The calibration in three phases, so that its experiments can be fitted anywhere:
+//!
+//! 1. [`plan`]: the Latin-hypercube design, the reference on the selection experiments, the scales of
+//!    the deviations and each mode's NARX structure, all decided on those few experiments;
+//! 2. [`fit_experiments`]: for any experiments, the reference storm and every mode's refined NARX
+//!    coefficients: independent of each other, small to send back ([`ExperimentFit`]), the same
+//!    numbers on whichever machine runs them;
+//! 3. [`assemble`]: the polynomial chaos expansions of the coefficients and static levels, and the
+//!    diagnostics.
+//!
+//! Only the selection experiments' histories are held in memory (a full-size experiment's are
+//! 4 MB); every other experiment is reduced to its coefficients as soon as it has run.
+
+use super::Parametrization;
+use super::calibrate::{CalibrationOptions, ModeDiagnostics, Observer, Progress};
+use super::identify::{Record, StructureChoice, least_squares, refine, select_structure, simulate};
+use super::metamodel::{
+    CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeModel, StageSeconds, StaticResponse,
+};
+use super::narx::relative_error;
+use super::pce::SparsePce;
+use crate::dynamics::integrate_reduced;
+use crate::error::{Error, Result};
+use crate::problem::Problem;
+use crate::uncertainty::{latin_hypercube, rng_from_seed};
+use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
+
+/// What every experiment's fit needs, decided on the selection experiments. Small and
+/// serialisable; rebuilding it from the same study and options gives the same plan.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct CalibrationPlan {
+    /// The design's physical inputs, by experiment.
+    pub design: Vec<Vec<f64>>,
+    /// Experiments the structures were chosen on (evenly spread over the design).
+    pub selection: Vec<usize>,
+    /// Per mode, the root-mean-square deviation of the output and of the modal force over the
+    /// selection experiments: the NARX works on deviations divided by these.
+    pub scales: Vec<(f64, f64)>,
+    /// Per mode, the chosen NARX structure.
+    pub structures: Vec<StructureChoice>,
+}
+
+impl CalibrationPlan {
+    /// The experiments not in the selection, in order.
+    pub fn remaining(&self) -> Vec<usize> {
+        (0..self.design.len()).filter(|k| !self.selection.contains(k)).collect()
+    }
+}
+
+/// What phase 3 needs of one experiment.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ExperimentFit {
+    pub index: usize,
+    /// Per mode: mean modal force (N) and static modal displacement at rest under it (m).
+    pub mean_load: Vec<f64>,
+    pub static_displacement: Vec<f64>,
+    /// Per mode: the refined NARX coefficients of the plan's structure.
+    pub coefficients: Vec<Vec<f64>>,
+    /// Per mode: free-run relative error with these coefficients (infinite if it diverged).
+    pub narx_errors: Vec<f64>,
+}
+
+/// One experiment's histories for every mode: modal forces and reference modal displacements.
+struct Experiment {
+    q: Vec<Vec<f64>>,
+    q_mean: Vec<f64>,
+    y: Vec<Vec<f64>>,
+}
+
+impl Experiment {
+    /// Runs experiment `k` of the design through the reduced-order reference.
+    fn run(problem: &Problem, options: &CalibrationOptions, x: &[f64], k: usize) -> Result<Experiment> {
+        let (p, forces) = problem.sample_storm(x, options.wind, options.seed, k)?;
+        let dampers = problem.dampers(&p)?;
+        let response =
+            integrate_reduced(&problem.sample_modes(&p), p.damping_ratio, &dampers, &forces, problem.storm.time_step)?;
+        Ok(Experiment { q: forces.series, q_mean: forces.mean, y: response.displacements })
+    }
+
+    /// Every mode's record, scaled as the plan says; with coupling each shares all modes' outputs.
+    fn records(&self, scales: &[(f64, f64)], coupled: bool) -> Vec<Record> {
+        let scaled = |series: &[f64], rest: f64, scale: f64| -> Arc<[f64]> {
+            series.iter().map(|v| (v - rest) / scale).collect()
+        };
+        let outputs: Vec<Arc<[f64]>> =
+            self.y.iter().zip(scales).map(|(y, &(scale, _))| scaled(y, y[0], scale)).collect();
+        (0..self.y.len())
+            .map(|m| Record {
+                y: outputs[m].clone(),
+                q: scaled(&self.q[m], self.q_mean[m], scales[m].1),
+                q_rest: 0.0,
+                outputs: if coupled { outputs.clone() } else { Vec::new() },
+            })
+            .collect()
+    }
+
+    fn fit(&self, index: usize, plan: &CalibrationPlan, options: &CalibrationOptions) -> Result<ExperimentFit> {
+        let coupled = coupled(options, plan.scales.len());
+        let mut fit = ExperimentFit {
+            index,
+            mean_load: self.q_mean.clone(),
+            static_displacement: self.y.iter().map(|y| y[0]).collect(),
+            coefficients: Vec::new(),
+            narx_errors: Vec::new(),
+        };
+        for (record, structure) in self.records(&plan.scales, coupled).iter().zip(&plan.structures) {
+            let start = least_squares(&structure.terms, record)?;
+            let theta = refine(options.refinement, &structure.terms, start, record);
+            let error = simulate(&structure.terms, &theta, record)
+                .map_or(f64::INFINITY, |y_hat| relative_error(&record.y, &y_hat));
+            fit.coefficients.push(theta);
+            fit.narx_errors.push(error);
+        }
+        Ok(fit)
+    }
+}
+
+fn coupled(options: &CalibrationOptions, modes: usize) -> bool {
+    options.narx.coupling_lags > 0 && modes > 1
+}
+
+fn check_cancel(observer: &dyn Observer) -> Result<()> {
+    if observer.cancelled() { Err(Error::Cancelled) } else { Ok(()) }
+}
+
+/// Root mean square over every experiment and instant.
+fn pooled_rms<'a>(series: impl Iterator<Item = &'a [f64]>, rest: impl Fn(usize) -> f64) -> f64 {
+    let (mut sum, mut count) = (0.0, 0usize);
+    for (e, s) in series.enumerate() {
+        let r = rest(e);
+        sum += s.iter().map(|v| (v - r) * (v - r)).sum::<f64>();
+        count += s.len();
+    }
+    (sum / count as f64).sqrt().max(f64::MIN_POSITIVE)
+}
+
+/// Phase 1 done: the plan, with the selection experiments' histories kept for phase 3.
+pub struct Planned {
+    pub plan: CalibrationPlan,
+    selection: Vec<Experiment>,
+    pub seconds: StageSeconds,
+}
+
+/// Phase 1: the design, the selection experiments through the reference (in parallel), the
+/// deviations' scales and every mode's structure.
+pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
+    options.validate()?;
+    let started = Instant::now();
+    let design = latin_hypercube(&problem.inputs, options.experiments, &mut rng_from_seed(options.seed));
+    let k = design.len();
+    let stride = (k as f64 / options.selection_experiments.min(k) as f64).max(1.0);
+    let selection: Vec<usize> =
+        (0..options.selection_experiments.min(k)).map(|i| (i as f64 * stride) as usize).collect();
+    let done = AtomicUsize::new(0);
+    let experiments: Vec<Experiment> = selection
+        .par_iter()
+        .map(|&i| {
+            check_cancel(observer)?;
+            let experiment = Experiment::run(problem, options, &design[i], i)?;
+            observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: k });
+            Ok(experiment)
+        })
+        .collect::<Result<_>>()?;
+    let mut seconds = StageSeconds { experiments: started.elapsed().as_secs_f64(), ..Default::default() };
+    // The NARX works on deviations from the static state at rest under the mean load: y′ = y − y(0),
+    // Q′ = Q − Q̄. Polynomial terms then act on the fluctuation, and the static level (a smooth
+    // function of the inputs) gets its own expansion instead of hiding in a constant.
+    let modes = problem.modes.count();
+    let scales: Vec<(f64, f64)> = (0..modes)
+        .map(|m| {
+            let y = pooled_rms(experiments.iter().map(|e| &e.y[m][..]), |e| experiments[e].y[m][0]);
+            let q = pooled_rms(experiments.iter().map(|e| &e.q[m][..]), |e| experiments[e].q_mean[m]);
+            (y, q)
+        })
+        .collect();
+    let stage = Instant::now();
+    let records: Vec<Vec<Record>> = experiments.iter().map(|e| e.records(&scales, coupled(options, modes))).collect();
+    let mut structures = Vec::new();
+    for mode in 0..modes {
+        check_cancel(observer)?;
+        observer.progress(Progress::Structure { mode: mode + 1 });
+        let chosen: Vec<Record> = records.iter().map(|r| r[mode].clone()).collect();
+        let dictionary = options.narx.dictionary(mode, modes);
+        structures.push(select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms)?);
+    }
+    seconds.structure = stage.elapsed().as_secs_f64();
+    Ok(Planned { plan: CalibrationPlan { design, selection, scales, structures }, selection: experiments, seconds })
+}
+
+impl Planned {
+    /// Phase 2 for the selection experiments, whose histories are at hand.
+    pub fn fit_selection(&self, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Vec<ExperimentFit>> {
+        self.selection
+            .par_iter()
+            .zip(&self.plan.selection)
+            .map(|(experiment, &index)| {
+                check_cancel(observer)?;
+                experiment.fit(index, &self.plan, options)
+            })
+            .collect()
+    }
+}
+
+/// Phase 2: experiments `indices` of the plan through the reference and the NARX fit, in parallel.
+/// `done_before` experiments of the design were done already (for progress reports).
+pub fn fit_experiments(
+    problem: &Problem,
+    options: &CalibrationOptions,
+    plan: &CalibrationPlan,
+    indices: &[usize],
+    done_before: usize,
+    observer: &dyn Observer,
+) -> Result<Vec<ExperimentFit>> {
+    let done = AtomicUsize::new(done_before);
+    let total = plan.design.len();
+    indices
+        .par_iter()
+        .map(|&k| {
+            check_cancel(observer)?;
+            let x = plan.design.get(k).ok_or_else(|| Error::invalid("experiment", format!("no experiment {k}")))?;
+            let fit = Experiment::run(problem, options, x, k)?.fit(k, plan, options)?;
+            observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
+            Ok(fit)
+        })
+        .collect()
+}
+
+/// Phase 3: the expansions of every experiment's coefficients and static level over the inputs,
+/// the PC-NARX error on the selection experiments, and the metamodel. `fits` holds every
+/// experiment of the design, in any order.
+pub fn assemble(
+    problem: &Problem,
+    options: &CalibrationOptions,
+    planned: &Planned,
+    mut fits: Vec<ExperimentFit>,
+    mut seconds: StageSeconds,
+    observer: &dyn Observer,
+) -> Result<Metamodel> {
+    let started = Instant::now();
+    let plan = &planned.plan;
+    fits.sort_by_key(|f| f.index);
+    if fits.iter().map(|f| f.index).ne(0..plan.design.len()) {
+        return Err(Error::Numerical("assembling needs one fit of every experiment of the design".into()));
+    }
+    let xi: Vec<Vec<f64>> = plan.design.iter().map(|x| problem.inputs.to_standard(x)).collect();
+    let modes = plan.structures.len();
+    let selection_records: Vec<Vec<Record>> =
+        planned.selection.iter().map(|e| e.records(&plan.scales, coupled(options, modes))).collect();
+    let mut models = Vec::new();
+    let mut diagnostics = Vec::new();
+    for mode in 0..modes {
+        check_cancel(observer)?;
+        observer.progress(Progress::Expansion { mode: mode + 1 });
+        let (output_scale, input_scale) = plan.scales[mode];
+        let structure = &plan.structures[mode];
+        let terms = structure.terms.clone();
+        let largest_load = fits.iter().map(|f| f.mean_load[mode].abs()).fold(0.0, f64::max);
+        let per_unit_mean_load = fits.iter().all(|f| f.mean_load[mode].abs() > 1e-6 * largest_load);
+        let static_targets: Vec<f64> = fits
+            .iter()
+            .map(|f| {
+                let y0 = f.static_displacement[mode];
+                if per_unit_mean_load { y0 / f.mean_load[mode] } else { y0 }
+            })
+            .collect();
+        let static_response = StaticResponse {
+            per_unit_mean_load,
+            expansion: SparsePce::fit(&problem.inputs, &xi, &static_targets, &options.pce)?,
+        };
+        let thetas: Vec<Vec<f64>> = fits.iter().map(|f| f.coefficients[mode].clone()).collect();
+        let parametrization = options.parametrization.unwrap_or_else(|| Parametrization::choose(&terms, &thetas));
+        let expanded: Vec<Vec<f64>> = thetas.iter().map(|theta| parametrization.forward(&terms, theta)).collect();
+        let expansions: Vec<SparsePce> = (0..terms.len())
+            .into_par_iter()
+            .map(|i| {
+                let targets: Vec<f64> = expanded.iter().map(|phi| phi[i]).collect();
+                SparsePce::fit(&problem.inputs, &xi, &targets, &options.pce)
+            })
+            .collect::<Result<_>>()?;
+
+        let pc_errors: Vec<f64> = planned
+            .selection
+            .par_iter()
+            .zip(&plan.selection)
+            .zip(&selection_records)
+            .map(|((experiment, &index), records)| {
+                let phi: Vec<f64> = expansions.iter().map(|pce| pce.evaluate(&xi[index])).collect();
+                let theta = parametrization.inverse(&terms, &phi);
+                let level = static_response.evaluate(&xi[index], experiment.q_mean[mode]);
+                simulate(&terms, &theta, &records[mode]).map_or(f64::INFINITY, |y_hat| {
+                    let full: Vec<f64> = y_hat.iter().map(|v| level + v * output_scale).collect();
+                    relative_error(&experiment.y[mode], &full)
+                })
+            })
+            .collect();
+        let narx_errors: Vec<f64> = fits.iter().map(|f| f.narx_errors[mode]).collect();
+        let diverged = narx_errors.iter().chain(&pc_errors).filter(|e| !e.is_finite()).count();
+        let mean = |errors: &[f64]| errors.iter().sum::<f64>() / errors.len() as f64;
+        diagnostics.push(ModeDiagnostics {
+            mode: mode + 1,
+            selected_terms: terms.iter().map(|t| t.to_string()).collect(),
+            candidate_structures: structure.candidates,
+            structure_error: structure.error,
+            narx_mean_relative_error: mean(&narx_errors),
+            pc_narx_mean_relative_error: mean(&pc_errors),
+            static_level_loo_error: static_response.expansion.loo_error,
+            coefficient_loo_errors: expansions.iter().map(|p| p.loo_error).collect(),
+            coefficient_pce_terms: expansions.iter().map(|p| p.terms.len()).collect(),
+            diverged_experiments: diverged,
+        });
+        models.push(ModeModel {
+            term_names: terms.iter().map(|t| t.to_string()).collect(),
+            terms,
+            output_scale,
+            input_scale,
+            static_response,
+            parametrization,
+            coefficients: expansions,
+        });
+    }
+    seconds.expansion = started.elapsed().as_secs_f64();
+    seconds.total = seconds.experiments + seconds.structure + seconds.coefficients + seconds.expansion;
+    let count = diagnostics.len() as f64;
+    let modes = &problem.modes;
+    Ok(Metamodel {
+        format: FORMAT.into(),
+        version: FORMAT_VERSION,
+        problem: problem.resolved_spec(),
+        modes: ModalBasis {
+            frequencies_rad_s: modes.frequencies.clone(),
+            modal_masses_kg: modes.modal_masses.clone(),
+            shapes: (0..modes.count()).map(|m| modes.shapes.col(m).iter().copied().collect()).collect(),
+        },
+        models,
+        calibration: CalibrationSummary {
+            options: options.clone(),
+            narx_mean_relative_error: diagnostics.iter().map(|d| d.narx_mean_relative_error).sum::<f64>() / count,
+            pc_narx_mean_relative_error: diagnostics.iter().map(|d| d.pc_narx_mean_relative_error).sum::<f64>() / count,
+            modes: diagnostics,
+            seconds,
+        },
+    })
+}
