@@ -62,6 +62,25 @@ async fn operation(client: &reqwest::Client, replica: &Replica, id: &str) -> Val
     client.get(format!("{}/v1/operations/{id}", replica.address)).send().await.unwrap().json().await.unwrap()
 }
 
+/// Polls the operation until it is done and asserts that it succeeded.
+async fn wait_succeeded(client: &reqwest::Client, replica: &Replica, id: &str, limit: Duration) {
+    let started = Instant::now();
+    loop {
+        let op = operation(client, replica, id).await;
+        if op["done"] == true {
+            assert_eq!(op["state"], "succeeded", "{op}");
+            return;
+        }
+        assert!(started.elapsed() < limit, "stuck: {op}");
+        tokio::time::sleep(Duration::from_millis(250)).await;
+    }
+}
+
+/// The process id in a lease owner (`host-pidN-uuid`).
+fn pid_of(owner: &str) -> String {
+    owner.split("-pid").nth(1).and_then(|p| p.split('-').next()).unwrap().to_string()
+}
+
 /// (job id, lease owner) of the running jobs.
 async fn running(pool: &sqlx::AnyPool) -> Vec<(String, String)> {
     let rows = sqlx::query("SELECT id, lease_owner FROM jobs WHERE state = 'running'").fetch_all(pool).await.unwrap();
@@ -93,7 +112,6 @@ async fn replicas_share_jobs_and_survive_a_killed_one() {
         assert!(started.elapsed() < Duration::from_secs(60), "both jobs never ran at once: {jobs:?}");
         tokio::time::sleep(Duration::from_millis(100)).await;
     };
-    let pid_of = |owner: &str| owner.split("-pid").nth(1).and_then(|p| p.split('-').next()).unwrap().to_string();
     let mut pids: Vec<String> = owners.iter().map(|(_, owner)| pid_of(owner)).collect();
     pids.sort();
     let mut expected = vec![first.pid().to_string(), second.pid().to_string()];
@@ -103,17 +121,8 @@ async fn replicas_share_jobs_and_survive_a_killed_one() {
     // Kill the first replica (no graceful release): its job's lease runs out and the second takes it up.
     let (orphan, _) = owners.iter().find(|(_, owner)| pid_of(owner) == first.pid().to_string()).unwrap().clone();
     drop(first);
-    let started = Instant::now();
     for id in &ids {
-        loop {
-            let op = operation(&client, &second, id).await;
-            if op["done"] == true {
-                assert_eq!(op["state"], "succeeded", "{op}");
-                break;
-            }
-            assert!(started.elapsed() < Duration::from_secs(300), "stuck: {op}");
-            tokio::time::sleep(Duration::from_millis(250)).await;
-        }
+        wait_succeeded(&client, &second, id, Duration::from_secs(300)).await;
     }
     let orphan_op = operation(&client, &second, &orphan).await;
     assert_eq!(orphan_op["attempts"], 2, "taken up again once: {orphan_op}");
@@ -145,16 +154,7 @@ async fn api_and_worker_roles_split_the_work() {
     assert_eq!(health.status().as_u16(), 200);
     let v1 = client.get(format!("{}/v1/presets", worker.address)).send().await.unwrap();
     assert_eq!(v1.status().as_u16(), 404, "a worker replica serves no API");
-    let started = Instant::now();
-    loop {
-        let op = operation(&client, &api, &id).await;
-        if op["done"] == true {
-            assert_eq!(op["state"], "succeeded", "{op}");
-            break;
-        }
-        assert!(started.elapsed() < Duration::from_secs(120), "stuck: {op}");
-        tokio::time::sleep(Duration::from_millis(250)).await;
-    }
+    wait_succeeded(&client, &api, &id, Duration::from_secs(120)).await;
 }
 
 /// One calibration's experiments are spread over the replicas: both run some of its tasks.
@@ -174,7 +174,7 @@ async fn one_calibration_is_spread_over_replicas() {
         let rows = sqlx::query("SELECT lease_owner FROM tasks WHERE state = 'running'").fetch_all(&pool).await.unwrap();
         for row in rows {
             let owner: String = row.get("lease_owner");
-            task_owners.insert(owner.split("-pid").nth(1).unwrap().split('-').next().unwrap().to_string());
+            task_owners.insert(pid_of(&owner));
         }
         let op = operation(&client, &second, &id).await;
         if op["done"] == true {
