@@ -1,16 +1,23 @@
-//! Per-realization cost of the physics at the paper's full size (40 storeys, 900 s at 100 Hz):
-//! wind by both paths and both reference integrators, medians of repeated runs in one process.
-//! Run with `cargo bench --bench physics`; `windmeta bench` prints the same table.
+//! The method's costs at the paper's full size (40 storeys, 900 s at 100 Hz, K = 200, 10 000
+//! samples), medians of repeated runs in one process: the same report as `windmeta bench`.
+//! Run with `cargo bench --bench physics`; BENCH_PRESET, BENCH_REPETITIONS, BENCH_EXPERIMENTS and
+//! BENCH_SAMPLES change the sizes.
 
 fn main() {
-    let repetitions = std::env::var("BENCH_REPETITIONS").ok().and_then(|v| v.parse().ok()).unwrap_or(7);
-    for preset in ["frame40", "frame40-kn"] {
-        match windmeta::cli::physics_rows(preset, 900.0, repetitions) {
-            Ok(rows) => println!("{}", windmeta::cli::table(preset, 900.0, &rows)),
-            Err(error) => {
-                eprintln!("error: {error}");
-                std::process::exit(1);
-            }
+    let var = |name: &str, default: usize| std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default);
+    let args = windmeta::cli::BenchArgs {
+        preset: std::env::var("BENCH_PRESET").unwrap_or_else(|_| "frame40-kn".into()),
+        repetitions: var("BENCH_REPETITIONS", 7),
+        duration: 900.0,
+        experiments: var("BENCH_EXPERIMENTS", 200),
+        samples: var("BENCH_SAMPLES", 10_000),
+        json: false,
+    };
+    match windmeta::cli::bench_report(&args) {
+        Ok(report) => println!("{}", windmeta::cli::table(&report)),
+        Err(error) => {
+            eprintln!("error: {error}");
+            std::process::exit(1);
         }
     }
 }

@@ -9,7 +9,7 @@ use crate::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::structure::{CustomStructure, Modes, Structure, frame40};
 use crate::uncertainty::{Input, InputModel, Marginal, Rng, rng_from_seed, stream_seed};
-use crate::wind::{ModalForces, StormGrid, WindLoads, WindSite};
+use crate::wind::{CoarseModalForces, ModalForces, ModalWind, StormGrid, WindLoads, WindSite};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -101,6 +101,8 @@ pub struct Problem {
     pub all_modes: Modes,
     pub inputs: InputModel,
     pub wind: WindLoads,
+    /// The modal-force fast path for `modes`, its spectral table built once.
+    pub modal_wind: ModalWind,
     pub damper_exponent: f64,
     pub storm: StormGrid,
 }
@@ -182,12 +184,24 @@ impl Problem {
         let all_modes = Modes::of(&structure, structure.floors())?;
         let site = spec.wind.clone().unwrap_or_default();
         let wind = WindLoads::new(&site, &structure)?;
+        let modal_wind = ModalWind::new(&wind, modes.shapes.as_ref());
         let damper_exponent = spec.damper_exponent.unwrap_or(0.38);
         if !(damper_exponent.is_finite() && damper_exponent > 0.0 && damper_exponent <= 2.0) {
             return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {damper_exponent}")));
         }
         let storm = StormGrid::new(spec.duration_s.unwrap_or(900.0), spec.time_step_s.unwrap_or(0.01), &site)?;
-        Ok(Problem { name, spec: spec.clone(), structure, modes, all_modes, inputs, wind, damper_exponent, storm })
+        Ok(Problem {
+            name,
+            spec: spec.clone(),
+            structure,
+            modes,
+            all_modes,
+            inputs,
+            wind,
+            modal_wind,
+            damper_exponent,
+            storm,
+        })
     }
 
     /// A spec that rebuilds exactly this study: every input's marginal and the storm grid as they
@@ -236,27 +250,33 @@ impl Problem {
         Dampers::new(&self.structure, &p.damper_coefficients, self.damper_exponent)
     }
 
-    /// Modal forces of one storm for a sample, by either wind path.
-    pub fn modal_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<ModalForces> {
+    /// A storm's modal forces on the wind's generation grid, by the fast path or the full field.
+    pub fn coarse_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<CoarseModalForces> {
         match path {
-            WindPath::Modal => self.wind.modal_forces(p.wind_speed, self.modes.shapes.as_ref(), &self.storm, rng),
+            WindPath::Modal => self.modal_wind.simulate(p.wind_speed, self.storm.duration, rng),
             WindPath::Field => {
-                Ok(self.wind.floor_forces(p.wind_speed, &self.storm, rng)?.project(self.modes.shapes.as_ref()))
+                self.wind.projected_field(p.wind_speed, self.modes.shapes.as_ref(), self.storm.duration, rng)
             }
         }
     }
 
-    /// Sample k of a run seeded with `seed`: its physical parameters and its storm's modal forces.
-    /// The storm depends only on (seed, k), whichever thread draws it and however many there are.
+    /// A storm's modal forces on the storm's grid.
+    pub fn modal_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<ModalForces> {
+        Ok(self.coarse_forces(p, path, rng)?.on_grid(&self.storm))
+    }
+
+    /// Sample k of a run seeded with `seed`: its physical parameters and its storm's modal forces on
+    /// the generation grid. The storm depends only on (seed, k), whichever thread draws it and
+    /// however many there are.
     pub fn sample_storm(
         &self,
         x: &[f64],
         path: WindPath,
         seed: u64,
         k: usize,
-    ) -> Result<(PhysicalParameters, ModalForces)> {
+    ) -> Result<(PhysicalParameters, CoarseModalForces)> {
         let p = self.parameters(x)?;
-        let forces = self.modal_forces(&p, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
+        let forces = self.coarse_forces(&p, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
         Ok((p, forces))
     }
 

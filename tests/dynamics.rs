@@ -111,8 +111,7 @@ fn reduced_model_converges_as_the_time_step_shrinks() {
     let finest = 0.0025;
     let (p, x) = stiff_damper_problem(60.0, finest);
     let params = p.parameters(&x).unwrap();
-    let forces =
-        p.wind.modal_forces(params.wind_speed, p.modes.shapes.as_ref(), &p.storm, &mut rng_from_seed(8)).unwrap();
+    let forces = p.modal_wind.forces(params.wind_speed, &p.storm, &mut rng_from_seed(8)).unwrap();
     let modes = p.sample_modes(&params);
     let dampers = p.dampers(&params).unwrap();
     let roofs: Vec<Vec<f64>> = [8, 4, 2, 1]

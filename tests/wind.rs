@@ -69,7 +69,8 @@ fn modal_variance_discrete(p: &Problem, projection: &ProjectedSpectrum) -> Vec<f
 }
 
 /// Over its full period T̂ = 2π·3/Δω = 6144 s Deodatis' scheme is ergodic: the fast path's sample
-/// variance of each modal force equals the discretised target to rounding, for any seed. That
+/// variance of each modal force equals the discretised target for any seed, to rounding plus the
+/// spectral table's interpolation error (< 10⁻⁷, src/wind/modal.rs). That
 /// target differs from the continuous 2∫S_Q dω by the scheme's offset Riemann sum, about
 /// Δω/(6ω_c) ≈ 1 % for a spectral width ω_c ≈ 0.06 rad/s; 2 % bounds it.
 #[test]
@@ -78,7 +79,7 @@ fn fast_path_variance_over_its_period_matches_the_target() {
     let dt = 0.1;
     let period = grid(&p).period(3);
     let storm = StormGrid::new(period - dt, dt, &p.wind.site).unwrap();
-    let forces = p.wind.modal_forces(SPEED, p.modes.shapes.as_ref(), &storm, &mut rng_from_seed(5)).unwrap();
+    let forces = p.modal_wind.forces(SPEED, &storm, &mut rng_from_seed(5)).unwrap();
     let field = p.wind.spectrum(SPEED);
     let projected = projection(&p, &field);
     let discrete = modal_variance_discrete(&p, &projected);
@@ -86,7 +87,7 @@ fn fast_path_variance_over_its_period_matches_the_target() {
     for m in 0..3 {
         let q = &forces.series[m];
         let var = q.iter().map(|x| (x - forces.mean[m]).powi(2)).sum::<f64>() / q.len() as f64;
-        assert!((var / discrete[m] - 1.0).abs() < 1e-9, "mode {}: {var:e} vs discrete {:e}", m + 1, discrete[m]);
+        assert!((var / discrete[m] - 1.0).abs() < 1e-7, "mode {}: {var:e} vs discrete {:e}", m + 1, discrete[m]);
         assert!((var / continuous[m] - 1.0).abs() < 0.02, "mode {}: {var:e} vs continuous {:e}", m + 1, continuous[m]);
     }
 }
@@ -156,9 +157,8 @@ fn modal_fast_path_equals_the_projected_field_in_law() {
     let projected: Vec<_> = (0..STORMS)
         .map(|seed| p.wind.floor_forces(SPEED, &storm, &mut rng_from_seed(200 + seed)).unwrap().project(shapes))
         .collect();
-    let direct: Vec<_> = (0..STORMS)
-        .map(|seed| p.wind.modal_forces(SPEED, shapes, &storm, &mut rng_from_seed(300 + seed)).unwrap())
-        .collect();
+    let direct: Vec<_> =
+        (0..STORMS).map(|seed| p.modal_wind.forces(SPEED, &storm, &mut rng_from_seed(300 + seed)).unwrap()).collect();
     let field = p.wind.spectrum(SPEED);
     let targets = modal_variance_targets(&p, &projection(&p, &field));
     for (m, target) in targets.iter().enumerate() {

@@ -4,7 +4,7 @@
 use super::Response;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::surrogate::{Metamodel, Observer, Progress};
+use crate::surrogate::{ForceSource, LANES, Metamodel, Observer, Progress};
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -111,20 +111,34 @@ pub fn metamodel_peaks(
     response.check(problem.structure.floors())?;
     let xs = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let path = metamodel.calibration.options.wind;
+    let weights = response.weights(&metamodel.modes.shapes);
     let done = AtomicUsize::new(0);
-    xs.par_iter()
+    let peaks: Vec<Vec<f64>> = xs
+        .par_chunks(LANES)
         .enumerate()
-        .map(|(k, x)| {
+        .map(|(chunk, xs)| {
             if observer.cancelled() {
                 return Err(Error::Cancelled);
             }
-            let (_, forces) = problem.sample_storm(x, path, seed, k)?;
-            let modal =
-                metamodel.predict(problem, x, &forces).map_err(|e| Error::Numerical(format!("sample {k}: {e}")))?;
-            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });
-            Ok(response.peak(&metamodel.modes.shapes, &modal))
+            let first = chunk * LANES;
+            let storms = xs
+                .iter()
+                .enumerate()
+                .map(|(i, x)| Ok(problem.sample_storm(x, path, seed, first + i)?.1))
+                .collect::<Result<Vec<_>>>()?;
+            let batch: Vec<(usize, &[f64], &dyn ForceSource)> = xs
+                .iter()
+                .zip(&storms)
+                .enumerate()
+                .map(|(i, (x, f))| (first + i, &x[..], f as &dyn ForceSource))
+                .collect();
+            let peaks = metamodel.peaks(problem, &batch, &weights)?;
+            let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();
+            observer.progress(Progress::Samples { done, total: samples });
+            Ok(peaks)
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(peaks.concat())
 }
 
 #[cfg(test)]

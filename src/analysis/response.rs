@@ -28,14 +28,19 @@ impl Response {
         Ok(())
     }
 
-    /// The history from modal displacements `modal[m][t]` and shapes `shapes[m][floor]`.
-    pub fn history(&self, shapes: &[Vec<f64>], modal: &[Vec<f64>]) -> Vec<f64> {
+    /// The response as Σ_m w_m y_m: the weight of each mode, from shapes `shapes[m][floor]`.
+    pub fn weights(&self, shapes: &[Vec<f64>]) -> Vec<f64> {
         let weight = |floor: usize| -> Vec<f64> { shapes.iter().map(|s| s[floor - 1]).collect() };
-        let weights: Vec<f64> = match *self {
+        match *self {
             Response::Displacement { floor } => weight(floor),
             Response::Drift { floor: 1 } => weight(1),
             Response::Drift { floor } => weight(floor).iter().zip(weight(floor - 1)).map(|(a, b)| a - b).collect(),
-        };
+        }
+    }
+
+    /// The history from modal displacements `modal[m][t]` and shapes `shapes[m][floor]`.
+    pub fn history(&self, shapes: &[Vec<f64>], modal: &[Vec<f64>]) -> Vec<f64> {
+        let weights = self.weights(shapes);
         let steps = modal.first().map_or(0, Vec::len);
         (0..steps).map(|t| modal.iter().zip(&weights).map(|(y, w)| w * y[t]).sum()).collect()
     }

@@ -84,7 +84,8 @@ pub fn validate(
             if observer.cancelled() {
                 return Err(Error::Cancelled);
             }
-            let (p, forces) = problem.sample_storm(x, path, seed, k)?;
+            let (p, coarse) = problem.sample_storm(x, path, seed, k)?;
+            let forces = coarse.on_grid(&problem.storm);
             let started = Instant::now();
             let reference = integrate_reduced(
                 &problem.sample_modes(&p),

@@ -11,7 +11,7 @@ mod simulate;
 mod validate;
 
 pub use args::ProblemArgs;
-pub use bench::{BenchArgs, BenchRow, bench, physics_rows, table};
+pub use bench::{BenchArgs, BenchReport, BenchRow, bench, bench_report, table};
 pub use calibrate::{CalibrateArgs, calibrate};
 pub use exceedance::{ExceedanceArgs, exceedance};
 pub use modes::{ModesArgs, modes};

@@ -2,12 +2,12 @@
 //! versioned.
 
 use super::Parametrization;
-use super::narx::{NarxTerm, joint_free_run};
+use super::batch::{self, BatchError, BatchSample, ForceSource, LANES, Lanes, ModeProgram};
+use super::narx::NarxTerm;
 use super::pce::SparsePce;
 use super::{CalibrationOptions, ModeDiagnostics};
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
-use crate::wind::ModalForces;
 use serde::{Deserialize, Serialize};
 
 pub const FORMAT: &str = "windmeta-pc-narx";
@@ -135,25 +135,97 @@ impl Metamodel {
             .collect()
     }
 
-    /// Free-runs every mode on the sample's modal forces; modal displacement histories (m). A
-    /// diverging free run is an error, never a result.
-    pub fn predict(&self, problem: &Problem, x: &[f64], forces: &ModalForces) -> Result<Vec<Vec<f64>>> {
+    fn programs(&self) -> Vec<ModeProgram<'_>> {
+        self.models.iter().map(|m| ModeProgram { terms: &m.terms, input_scale: m.input_scale }).collect()
+    }
+
+    /// Static levels and coefficients of one sample.
+    fn sample(&self, problem: &Problem, x: &[f64], forces: &dyn ForceSource) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
         problem.inputs.check_sample(x)?;
-        let theta = self.coefficients(problem, x);
         let xi = problem.inputs.to_standard(x);
-        let inputs: Vec<Vec<f64>> = self
+        let levels = self
             .models
             .iter()
             .enumerate()
-            .map(|(m, model)| forces.series[m].iter().map(|v| (v - forces.mean[m]) / model.input_scale).collect())
+            .map(|(m, model)| model.static_response.evaluate(&xi, forces.mean(m)))
             .collect();
-        let models: Vec<(&[NarxTerm], &[f64])> =
-            self.models.iter().zip(&theta).map(|(model, t)| (&model.terms[..], &t[..])).collect();
-        let mut out = joint_free_run(&models, &inputs)?;
-        for (m, (model, y)) in self.models.iter().zip(out.iter_mut()).enumerate() {
-            let level = model.static_response.evaluate(&xi, forces.mean[m]);
-            y.iter_mut().for_each(|v| *v = level + *v * model.output_scale);
-        }
+        Ok((levels, self.coefficients(problem, x)))
+    }
+
+    /// Free-runs every mode on the sample's modal forces; modal displacement histories (m). A
+    /// diverging free run is an error, never a result.
+    pub fn predict(&self, problem: &Problem, x: &[f64], forces: &dyn ForceSource) -> Result<Vec<Vec<f64>>> {
+        let (levels, theta) = self.sample(problem, x, forces)?;
+        let steps = problem.storm.steps();
+        let mut out = vec![vec![0.0; steps]; self.models.len()];
+        let samples = [BatchSample { theta, forces }];
+        batch::run(&self.programs(), &samples, steps, problem.storm.time_step, &mut |first, outputs| {
+            for (m, series) in outputs.iter().enumerate() {
+                let scale = self.models[m].output_scale;
+                for (o, lanes) in out[m][first..].iter_mut().zip(series.iter()) {
+                    *o = levels[m] + lanes[0] * scale;
+                }
+            }
+        })
+        .map_err(|e| batch_error(e, &[None]))?;
         Ok(out)
+    }
+
+    /// Peak |Σ_m w_m y_m(t)| over the storm for up to [`LANES`] samples run together, `samples[i]`
+    /// = (its number in the request, its inputs, its forces); the number names a diverging sample.
+    pub fn peaks(
+        &self,
+        problem: &Problem,
+        samples: &[(usize, &[f64], &dyn ForceSource)],
+        weights: &[f64],
+    ) -> Result<Vec<f64>> {
+        let mut levels = Vec::with_capacity(samples.len());
+        let mut batch = Vec::with_capacity(samples.len());
+        for &(_, x, forces) in samples {
+            let (level, theta) = self.sample(problem, x, forces)?;
+            levels.push(level);
+            batch.push(BatchSample { theta, forces });
+        }
+        // The response is formed exactly as from the modal displacements, Σ_m w_m (level_m + scale_m ŷ_m),
+        // so that it rounds as the histories do.
+        let mut levels_by_mode = vec![[0.0; LANES]; self.models.len()];
+        for (lane, level) in levels.iter().enumerate() {
+            for (m, v) in level.iter().enumerate() {
+                levels_by_mode[m][lane] = *v;
+            }
+        }
+        let mut peaks = [0.0f64; LANES];
+        let mut response: Vec<Lanes> = Vec::new();
+        batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, &mut |_, outputs| {
+            response.clear();
+            response.resize(outputs[0].len(), [0.0; LANES]);
+            for (m, series) in outputs.iter().enumerate() {
+                let (w, scale, level) = (weights[m], self.models[m].output_scale, &levels_by_mode[m]);
+                for (u, y) in response.iter_mut().zip(series.iter()) {
+                    for l in 0..LANES {
+                        u[l] += w * (level[l] + y[l] * scale);
+                    }
+                }
+            }
+            for u in &response {
+                for l in 0..LANES {
+                    peaks[l] = peaks[l].max(u[l].abs());
+                }
+            }
+        })
+        .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))?;
+        Ok(peaks[..samples.len()].to_vec())
+    }
+}
+
+/// The error of a failed batch, naming the sample where it has a number.
+fn batch_error(error: BatchError, numbers: &[Option<usize>]) -> Error {
+    let (lane, message) = match error {
+        BatchError::Model { lane, error } => (lane, error.to_string()),
+        BatchError::Diverged(d) => (d.lane, format!("mode {}: the free run diverged at step {}", d.mode + 1, d.step)),
+    };
+    match numbers.get(lane).copied().flatten() {
+        Some(k) => Error::Numerical(format!("sample {k}: {message}")),
+        None => Error::Numerical(message),
     }
 }

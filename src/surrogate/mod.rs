@@ -1,6 +1,7 @@
 //! PC-NARX metamodels (sections 3.2-3.3): NARX dynamics per retained mode whose coefficients are
 //! sparse polynomial-chaos expansions of the uncertain inputs.
 
+pub mod batch;
 mod calibrate;
 pub mod identify;
 pub mod lars;
@@ -10,6 +11,7 @@ mod parametrization;
 pub mod pce;
 pub mod phases;
 
+pub use batch::{ForceSource, LANES};
 pub use calibrate::{CalibrationOptions, MAX_EXPERIMENTS, ModeDiagnostics, Observer, Progress, Silent, calibrate};
 pub use identify::Refinement;
 pub use metamodel::{CalibrationSummary, Metamodel, ModalBasis, ModeModel, StageSeconds, StaticResponse};

@@ -298,46 +298,6 @@ pub fn free_run(terms: &[NarxTerm], theta: &[f64], ex: &Exogenous, rest: f64, ou
     Ok(())
 }
 
-/// Joint free run of every mode, each reading the others' simulated outputs: the metamodel's
-/// prediction. `models[m]` = (terms, θ); `inputs[m]` the mode's scaled input (rest 0), the rests
-/// solved jointly. Returns the scaled outputs.
-pub fn joint_free_run(models: &[(&[NarxTerm], &[f64])], inputs: &[Vec<f64>]) -> Result<Vec<Vec<f64>>> {
-    let modes = models.len();
-    let n = inputs.first().map_or(0, Vec::len);
-    // Rest state by Gauss-Seidel on the modes' fixed points (the coupling is weak).
-    let mut rests = vec![0.0; modes];
-    for _ in 0..50 {
-        let before = rests.clone();
-        for (m, (terms, theta)) in models.iter().enumerate() {
-            rests[m] = rest_output(terms, theta, 0.0, &rests, rests[m])?;
-        }
-        if rests.iter().zip(&before).all(|(a, b)| (a - b).abs() <= 1e-15 * a.abs().max(1e-300)) {
-            break;
-        }
-    }
-    let mut out: Vec<Vec<f64>> = rests.iter().map(|&r| vec![r; n]).collect();
-    for t in 1..n {
-        for (m, (terms, theta)) in models.iter().enumerate() {
-            let mut value = 0.0;
-            for (term, c) in terms.iter().zip(theta.iter()) {
-                let series = &out[term.output_mode.unwrap_or(m)];
-                let y = if term.output_lag > t {
-                    rests[term.output_mode.unwrap_or(m)]
-                } else {
-                    series[t - term.output_lag]
-                };
-                let q = if term.input_lag > t { 0.0 } else { inputs[m][t - term.input_lag] };
-                value += c * term.value(y, q);
-            }
-            if diverged(value) {
-                return Err(Error::Numerical(format!("mode {}: the free run diverged at step {t}", m + 1)));
-            }
-            out[m][t] = value;
-        }
-    }
-    Ok(out)
-}
-
 /// Mean relative error of a series (as in Mai et al.): Σ(y − ŷ)² / Σ(y − ȳ)².
 pub fn relative_error(y: &[f64], y_hat: &[f64]) -> f64 {
     let mean = y.iter().sum::<f64>() / y.len() as f64;
@@ -382,23 +342,5 @@ mod tests {
         let ex = Exogenous { q: &q, q_rest: 1.0, outputs: &[], output_rests: &[] };
         let mut out = vec![0.0; 5000];
         assert!(free_run(&terms, &unstable, &ex, 0.0, &mut out).is_err());
-    }
-
-    /// Two coupled modes run jointly equal a hand-written recursion.
-    #[test]
-    fn joint_free_run_couples_the_modes() {
-        let a = [NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(1, 1, Some(1))];
-        let b = [NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(2, 1, Some(0))];
-        let (ta, tb) = ([0.5, 0.9, 0.05], [0.2, 0.8, -0.1]);
-        let inputs = vec![(0..20).map(|t| (t as f64).sin()).collect::<Vec<f64>>(), vec![1.0; 20]];
-        let out = joint_free_run(&[(&a, &ta), (&b, &tb)], &inputs).unwrap();
-        let (mut ya, mut yb) = (vec![0.0; 20], vec![0.0; 20]);
-        for t in 1..20 {
-            ya[t] = 0.5 * inputs[0][t] + 0.9 * ya[t - 1] + 0.05 * yb[t - 1];
-            yb[t] = 0.2 * inputs[1][t] + 0.8 * yb[t - 1] - 0.1 * if t >= 2 { ya[t - 2] } else { 0.0 };
-        }
-        for t in 0..20 {
-            assert!((out[0][t] - ya[t]).abs() < 1e-14 && (out[1][t] - yb[t]).abs() < 1e-14);
-        }
     }
 }

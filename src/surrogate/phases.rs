@@ -74,7 +74,8 @@ struct Experiment {
 impl Experiment {
     /// Runs experiment `k` of the design through the reduced-order reference.
     fn run(problem: &Problem, options: &CalibrationOptions, x: &[f64], k: usize) -> Result<Experiment> {
-        let (p, forces) = problem.sample_storm(x, options.wind, options.seed, k)?;
+        let (p, coarse) = problem.sample_storm(x, options.wind, options.seed, k)?;
+        let forces = coarse.on_grid(&problem.storm);
         let dampers = problem.dampers(&p)?;
         let response =
             integrate_reduced(&problem.sample_modes(&p), p.damping_ratio, &dampers, &forces, problem.storm.time_step)?;

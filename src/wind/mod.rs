@@ -4,11 +4,13 @@
 //! from the projected cross-spectral matrix Φᵀ S_f Φ (the fast path, equal in law).
 
 mod forces;
+mod modal;
 mod site;
 mod spectral;
 mod spectrum;
 
 pub use forces::{FloorForces, ModalForces, WindLoads};
+pub use modal::{CoarseModalForces, ModalWind};
 pub use site::{StormGrid, WindSite};
-pub use spectral::{CrossSpectralDensity, SpectralGrid, simulate};
+pub use spectral::{CoarseSeries, CrossSpectralDensity, SpectralGrid, simulate, simulate_coarse};
 pub use spectrum::{FieldSpectrum, ProjectedSpectrum};

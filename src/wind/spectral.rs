@@ -43,9 +43,35 @@ impl SpectralGrid {
     }
 }
 
+/// One realization on its generation grid: `series[j][q]` is component j at t = (q − 1)·step, so
+/// that cubic interpolation has a neighbour before t = 0 and two after the end.
+#[derive(Debug, Clone)]
+pub struct CoarseSeries {
+    pub step: f64,
+    pub series: Vec<Vec<f64>>,
+}
+
+impl CoarseSeries {
+    /// Component j at instants first, first + 1, … of a grid of step `time_step`, into `out`.
+    pub fn interpolate_into(&self, j: usize, time_step: f64, first: usize, offset: f64, out: &mut [f64]) {
+        interpolate_cubic(&self.series[j], self.step, time_step, first, offset, out);
+    }
+
+    /// Every component on `storm`'s grid.
+    pub fn on_grid(&self, storm: &StormGrid) -> Vec<Vec<f64>> {
+        (0..self.series.len())
+            .map(|j| {
+                let mut out = vec![0.0; storm.steps()];
+                self.interpolate_into(j, storm.time_step, 0, 0.0, &mut out);
+                out
+            })
+            .collect()
+    }
+}
+
 /// Simulates one realization of the process on `storm`'s time grid, generated every
 /// `generation_step` seconds (rounded down to an FFT-friendly grid) and interpolated by cubic
-/// convolution when that grid differs from the storm's. Returns one series per component.
+/// convolution. Returns one series per component.
 pub fn simulate(
     csd: &dyn CrossSpectralDensity,
     grid: &SpectralGrid,
@@ -53,27 +79,38 @@ pub fn simulate(
     storm: &StormGrid,
     rng: &mut Rng,
 ) -> Result<Vec<Vec<f64>>> {
+    Ok(simulate_coarse(csd, grid, generation_step, storm.duration, rng)?.on_grid(storm))
+}
+
+/// Simulates one realization over `duration` seconds on the generation grid only.
+pub fn simulate_coarse(
+    csd: &dyn CrossSpectralDensity,
+    grid: &SpectralGrid,
+    generation_step: f64,
+    duration: f64,
+    rng: &mut Rng,
+) -> Result<CoarseSeries> {
     let n = csd.dim();
     let lines = grid.lines;
     let domega = grid.step();
-    if storm.duration > grid.period(n) {
+    if duration > grid.period(n) {
         return Err(Error::invalid(
             "duration_s",
             format!(
-                "{} s is longer than the period of the simulated wind ({:.0} s); raise wind.frequencies",
-                storm.duration,
+                "{duration} s is longer than the period of the simulated wind ({:.0} s); raise wind.frequencies",
                 grid.period(n)
             ),
         ));
     }
-    let phases: Vec<f64> = (0..n * lines).map(|_| 2.0 * PI * rng.random::<f64>()).collect();
+    // e^{iφ_ml}, shared by every component j ≥ m.
+    let phases: Vec<Complex<f64>> =
+        (0..n * lines).map(|_| Complex::from_polar(1.0, 2.0 * PI * rng.random::<f64>())).collect();
 
     let fft_len = fft_friendly((2.0 * PI / (domega * generation_step)).ceil().max(2.0 * lines as f64 + 1.0) as usize);
     let dt_g = 2.0 * PI / (fft_len as f64 * domega);
-    let direct = (dt_g - storm.time_step).abs() <= 1e-9 * storm.time_step;
-    // Coarse instants p = −1 ..= last+1 so that cubic interpolation has neighbours at both ends.
-    let (first, count) =
-        if direct { (0i64, storm.steps()) } else { (-1i64, (storm.duration / dt_g).floor() as usize + 4) };
+    // Coarse instants q − 1 for q < count: from −dt_g to two steps past the last instant of any
+    // storm grid of this duration (a grid's last instant lies within half a step, ≤ π/(2ω_up), of it).
+    let count = ((duration + PI / grid.cutoff) / dt_g).ceil() as usize + 4;
 
     let mut coarse = vec![vec![0.0; count]; n];
     let fft = FftPlanner::<f64>::new().plan_fft_inverse(fft_len);
@@ -95,27 +132,27 @@ pub fn simulate(
                 column[l * n + j] = factor[j * n + m];
             }
         });
-        for (q, z) in modulation.iter_mut().enumerate() {
-            let t = (first + q as i64) as f64 * dt_g;
-            *z = Complex::from_polar(1.0, omega0 * t);
+        // e^{iω₀t} by rotation, anchored exactly every 64 instants (the drift stays at rounding level).
+        let rotation = Complex::from_polar(1.0, omega0 * dt_g);
+        let mut z = Complex::new(1.0, 0.0);
+        for (q, out) in modulation.iter_mut().enumerate() {
+            z = if q % 64 == 0 { Complex::from_polar(1.0, omega0 * (q as f64 - 1.0) * dt_g) } else { z * rotation };
+            *out = z;
         }
         for j in m..n {
             buffer.iter_mut().for_each(|b| *b = Complex::new(0.0, 0.0));
             for l in 0..lines {
                 let h = column[l * n + j];
-                buffer[l] = Complex::from_polar(amplitude * h, phases[m * lines + l]);
+                buffer[l] = phases[m * lines + l] * (amplitude * h);
             }
             fft.process_with_scratch(&mut buffer, &mut scratch);
             for (q, (out, z)) in coarse[j].iter_mut().zip(&modulation).enumerate() {
-                let p = (first + q as i64).rem_euclid(fft_len as i64) as usize;
+                let p = (q as i64 - 1).rem_euclid(fft_len as i64) as usize;
                 *out += (buffer[p] * z).re;
             }
         }
     }
-    if direct {
-        return Ok(coarse);
-    }
-    Ok(coarse.iter().map(|c| interpolate_cubic(c, dt_g, storm)).collect())
+    Ok(CoarseSeries { step: dt_g, series: coarse })
 }
 
 /// The smallest length ≥ `n` of the form 2^a 3^b 5^c, on which rustfft is fastest.
@@ -137,18 +174,27 @@ fn fft_friendly(n: usize) -> usize {
     best
 }
 
-/// Keys' cubic convolution (a = −½) from a coarse series whose first entry is at t = −dt_g.
-fn interpolate_cubic(coarse: &[f64], dt_g: f64, storm: &StormGrid) -> Vec<f64> {
-    (0..storm.steps())
-        .map(|i| {
-            let x = i as f64 * storm.time_step / dt_g;
-            let p = x.floor();
-            let f = x - p;
-            let q = p as usize + 1;
-            let (y0, y1, y2, y3) = (coarse[q - 1], coarse[q], coarse[q + 1], coarse[q + 2]);
-            y1 + 0.5 * f * (y2 - y0 + f * (2.0 * y0 - 5.0 * y1 + 4.0 * y2 - y3 + f * (3.0 * (y1 - y2) + y3 - y0)))
-        })
-        .collect()
+/// Keys' cubic convolution (a = −½) from a coarse series whose first entry is at t = −dt_g: writes
+/// offset + the value at instants first, first + 1, … of a grid of step `time_step`. At a coarse
+/// instant it returns the coarse value exactly. The cubic of each coarse interval is formed once
+/// for all the instants inside it, so a value does not depend on where a block starts.
+fn interpolate_cubic(coarse: &[f64], dt_g: f64, time_step: f64, first: usize, offset: f64, out: &mut [f64]) {
+    let ratio = time_step / dt_g;
+    let mut interval = usize::MAX;
+    let (mut y1, mut a, mut b, mut c) = (0.0, 0.0, 0.0, 0.0);
+    for (i, o) in (first..).zip(out.iter_mut()) {
+        let x = i as f64 * ratio;
+        // x ≥ 0, so truncation is the floor.
+        let p = x as usize;
+        let f = x - p as f64;
+        if p != interval {
+            interval = p;
+            let w = &coarse[p..p + 4];
+            let (y0, y_1, y2, y3) = (w[0], w[1], w[2], w[3]);
+            (y1, a, b, c) = (y_1, y2 - y0, 2.0 * y0 - 5.0 * y_1 + 4.0 * y2 - y3, 3.0 * (y_1 - y2) + y3 - y0);
+        }
+        *o = offset + (y1 + 0.5 * f * (a + f * (b + f * c)));
+    }
 }
 
 #[cfg(test)]
@@ -232,8 +278,8 @@ mod tests {
                 1.0 + 2.0 * t - 3.0 * t * t
             })
             .collect();
-        let storm = StormGrid { duration: 2.0, time_step: 0.01 };
-        let fine = interpolate_cubic(&coarse, dt_g, &storm);
+        let mut fine = vec![0.0; 201];
+        interpolate_cubic(&coarse, dt_g, 0.01, 0, 0.0, &mut fine);
         for (i, y) in fine.iter().enumerate() {
             let t = i as f64 * 0.01;
             assert!((y - (1.0 + 2.0 * t - 3.0 * t * t)).abs() < 1e-12);
