@@ -112,7 +112,14 @@ pub struct ImplicitDamperSolve {
     gradient: Vec<f64>,
     step: Vec<f64>,
     trial: Vec<f64>,
+    /// Damper velocities G s at the current iterate and |v|^α of each, kept between the calls
+    /// that evaluate the same iterate: a power is the expensive part of an iteration.
     velocities: Vec<f64>,
+    powers: Vec<f64>,
+    trial_velocities: Vec<f64>,
+    trial_powers: Vec<f64>,
+    /// Whether `velocities` and `powers` belong to the current iterate.
+    current: bool,
 }
 
 impl ImplicitDamperSolve {
@@ -129,6 +136,10 @@ impl ImplicitDamperSolve {
             step: vec![0.0; size],
             trial: vec![0.0; size],
             velocities: vec![0.0; dampers.len()],
+            powers: vec![0.0; dampers.len()],
+            trial_velocities: vec![0.0; dampers.len()],
+            trial_powers: vec![0.0; dampers.len()],
+            current: false,
         }
     }
 
@@ -138,8 +149,16 @@ impl ImplicitDamperSolve {
         }
     }
 
-    /// J(s), with the damper velocities of s already in `velocities`.
-    fn objective(&self, s: &[f64], a: &[f64], velocities: &[f64]) -> f64 {
+    /// Velocities G s and their powers |v|^α.
+    fn evaluate(&self, s: &[f64], velocities: &mut [f64], powers: &mut [f64]) {
+        Self::damper_velocities(&self.map, s, velocities);
+        for (p, v) in powers.iter_mut().zip(velocities.iter()) {
+            *p = v.abs().powf(self.exponent);
+        }
+    }
+
+    /// J(s), given the damper velocities of s and their powers |v|^α (|v|^{1+α} = |v|·|v|^α).
+    fn objective(&self, s: &[f64], a: &[f64], velocities: &[f64], powers: &[f64]) -> f64 {
         let n = self.size;
         let mut quadratic = 0.0;
         for i in 0..n {
@@ -148,7 +167,8 @@ impl ImplicitDamperSolve {
             quadratic += di * row;
         }
         let p = 1.0 + self.exponent;
-        let dissipation: f64 = velocities.iter().zip(&self.coefficients).map(|(v, c)| c / p * v.abs().powf(p)).sum();
+        let dissipation: f64 =
+            velocities.iter().zip(powers).zip(&self.coefficients).map(|((v, pw), c)| c / p * v.abs() * pw).sum();
         0.5 * quadratic + dissipation
     }
 
@@ -158,7 +178,12 @@ impl ImplicitDamperSolve {
     fn linearise(&mut self, s: &[f64], a: &[f64], forces: &mut [f64], curvature_factor: f64, floor: f64) {
         let n = self.size;
         let alpha = self.exponent;
-        Self::damper_velocities(&self.map, s, &mut self.velocities);
+        if !self.current {
+            let (mut velocities, mut powers) = (std::mem::take(&mut self.velocities), std::mem::take(&mut self.powers));
+            self.evaluate(s, &mut velocities, &mut powers);
+            (self.velocities, self.powers) = (velocities, powers);
+            self.current = true;
+        }
         for i in 0..n {
             self.gradient[i] = (0..n).map(|j| self.w_inverse[i * n + j] * (s[j] - a[j])).sum();
         }
@@ -167,9 +192,10 @@ impl ImplicitDamperSolve {
             let v = self.velocities[d];
             let c = self.coefficients[d];
             let magnitude = v.abs();
-            let f = c * v.signum() * magnitude.powf(alpha);
+            let f = c * v.signum() * self.powers[d];
             forces[d] = f;
-            let weight = c * curvature_factor * magnitude.max(floor).powf(alpha - 1.0);
+            let slope = if magnitude > floor { self.powers[d] / magnitude } else { floor.powf(alpha - 1.0) };
+            let weight = c * curvature_factor * slope;
             for &(i, wi) in row {
                 self.gradient[i] += wi * f;
                 for &(j, wj) in row {
@@ -207,6 +233,7 @@ impl ImplicitDamperSolve {
     /// without a line search. That is what converges where a damper comes to rest at the solution,
     /// where Newton overshoots by the factor 1 − 1/α.
     pub fn solve(&mut self, a: &[f64], s: &mut [f64], forces: &mut [f64]) -> Result<usize> {
+        self.current = false;
         for iteration in 0..MAX_NEWTON_ITERATIONS {
             let scale = s.iter().chain(a).fold(0.0f64, |m, x| m.max(x.abs()));
             let tolerance = STEP_TOLERANCE * scale + f64::MIN_POSITIVE;
@@ -216,25 +243,32 @@ impl ImplicitDamperSolve {
             let largest_step = self.step.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             if largest_step <= tolerance {
                 s.iter_mut().zip(&self.step).for_each(|(x, d)| *x += d);
-                Self::damper_velocities(&self.map, s, &mut self.velocities);
+                let (mut velocities, mut powers) =
+                    (std::mem::take(&mut self.velocities), std::mem::take(&mut self.powers));
+                self.evaluate(s, &mut velocities, &mut powers);
                 for (d, f) in forces.iter_mut().enumerate() {
-                    let v = self.velocities[d];
-                    *f = self.coefficients[d] * v.signum() * v.abs().powf(self.exponent);
+                    *f = self.coefficients[d] * velocities[d].signum() * powers[d];
                 }
+                (self.velocities, self.powers) = (velocities, powers);
                 return Ok(iteration + 1);
             }
-            let current = self.objective(s, a, &self.velocities);
+            let current = self.objective(s, a, &self.velocities, &self.powers);
             let slope: f64 = self.gradient.iter().zip(&self.step).map(|(g, d)| g * d).sum();
             self.take_trial_step(s);
-            let mut trial_velocities = std::mem::take(&mut self.velocities);
-            Self::damper_velocities(&self.map, &self.trial, &mut trial_velocities);
-            let value = self.objective(&self.trial, a, &trial_velocities);
-            self.velocities = trial_velocities;
-            let accepted = value <= current + 1e-4 * slope;
-            if !accepted {
+            let (mut velocities, mut powers) =
+                (std::mem::take(&mut self.trial_velocities), std::mem::take(&mut self.trial_powers));
+            self.evaluate(&self.trial, &mut velocities, &mut powers);
+            let value = self.objective(&self.trial, a, &velocities, &powers);
+            (self.trial_velocities, self.trial_powers) = (velocities, powers);
+            if value <= current + 1e-4 * slope {
+                // The trial is the next iterate: its velocities and powers are already known.
+                std::mem::swap(&mut self.velocities, &mut self.trial_velocities);
+                std::mem::swap(&mut self.powers, &mut self.trial_powers);
+            } else {
                 self.linearise(s, a, forces, 1.0, floor);
                 self.model_step()?;
                 self.take_trial_step(s);
+                self.current = false;
             }
             s.copy_from_slice(&self.trial);
         }

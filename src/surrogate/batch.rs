@@ -13,7 +13,7 @@
 
 use super::narx::{DIVERGENCE_BOUND, NarxTerm, diverged, rest_output};
 use crate::error::{Error, Result};
-use crate::wind::{CoarseModalForces, ModalForces};
+use crate::wind::{CoarseModalForces, CoarseSeries, InterpolationPlan, ModalForces};
 
 /// Samples per batch: one AVX-512 register of f64, two AVX2 ones.
 pub const LANES: usize = 8;
@@ -28,6 +28,10 @@ pub trait ForceSource: Sync {
     fn mean(&self, m: usize) -> f64;
     /// Mode m's force (N) at steps first, first + 1, … of the storm, into `out`.
     fn fill(&self, m: usize, time_step: f64, first: usize, out: &mut [f64]);
+    /// The fluctuations on the wind's generation grid, where the forces come from one.
+    fn coarse(&self) -> Option<&CoarseSeries> {
+        None
+    }
 }
 
 impl ForceSource for ModalForces {
@@ -45,6 +49,9 @@ impl ForceSource for CoarseModalForces {
     }
     fn fill(&self, m: usize, time_step: f64, first: usize, out: &mut [f64]) {
         CoarseModalForces::fill(self, m, time_step, first, out);
+    }
+    fn coarse(&self) -> Option<&CoarseSeries> {
+        Some(&self.fluctuations)
     }
 }
 
@@ -88,18 +95,18 @@ pub fn joint_rest(models: &[(&[NarxTerm], &[f64])]) -> Result<Vec<f64>> {
 }
 
 /// Runs up to [`LANES`] samples over `steps` steps of `time_step` and hands every block of scaled
-/// outputs (`outputs[m][i]`, the block's step i, one value per lane) to `consume(first, outputs)`.
-/// Lanes beyond `samples.len()` run a zero model. Fails on a lane's divergence, naming it.
+/// outputs to `consume(first, outputs)`, `outputs[i·modes + m]` being mode m at step first + i, one
+/// value per lane. Lanes beyond `samples.len()` run a zero model. Fails on a lane's divergence,
+/// naming it.
 pub fn run(
     programs: &[ModeProgram],
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[&[Lanes]]),
+    consume: &mut dyn FnMut(usize, &[Lanes]),
 ) -> std::result::Result<(), BatchError> {
     assert!(samples.len() <= LANES, "at most {LANES} samples per batch");
     let modes = programs.len();
-    let mut theta: Vec<Vec<Lanes>> = programs.iter().map(|p| vec![[0.0; LANES]; p.terms.len()]).collect();
     let mut rests = vec![[0.0; LANES]; modes];
     for (lane, sample) in samples.iter().enumerate() {
         let models: Vec<(&[NarxTerm], &[f64])> =
@@ -107,17 +114,41 @@ pub fn run(
         let rest = joint_rest(&models).map_err(|e| BatchError::Model { lane, error: e })?;
         for m in 0..modes {
             rests[m][lane] = rest[m];
-            for (i, c) in sample.theta[m].iter().enumerate() {
-                theta[m][i][lane] = *c;
+        }
+    }
+    let coefficient = |m: usize, k: usize| -> Lanes {
+        let mut c = [0.0; LANES];
+        for (lane, sample) in samples.iter().enumerate() {
+            c[lane] = sample.theta[m][k];
+        }
+        c
+    };
+    let mut exogenous = vec![Vec::new(); modes];
+    let mut linear = vec![Vec::new(); modes];
+    let mut feedback = vec![Vec::new(); modes];
+    for (m, program) in programs.iter().enumerate() {
+        for (k, t) in program.terms.iter().enumerate() {
+            let term = Compiled {
+                source: t.output_mode.unwrap_or(m),
+                output_lag: t.output_lag,
+                output_power: t.output_power,
+                input_lag: t.input_lag,
+                input_power: t.input_power,
+                coefficient: coefficient(m, k),
+            };
+            match (t.output_power, t.input_power) {
+                (0, _) => exogenous[m].push(term),
+                // Output t−lag of mode `source` sits lag·modes − source entries before this step's first.
+                (1, 0) => linear[m].push((t.output_lag * modes - term.source, term.coefficient)),
+                _ => feedback[m].push(term),
             }
         }
     }
     let history =
         programs.iter().flat_map(|p| p.terms.iter()).map(|t| t.output_lag.max(t.input_lag)).max().unwrap_or(0);
-    let compiled: Vec<Vec<Compiled>> =
-        programs.iter().enumerate().map(|(m, p)| p.terms.iter().map(|t| Compiled::of(t, m)).collect()).collect();
-    let state = State { theta, rests, compiled, history };
-    dispatch(&state, programs, samples, steps, time_step, consume).map_err(BatchError::Diverged)
+    let inverse_scales = programs.iter().map(|p| 1.0 / p.input_scale).collect();
+    let state = State { rests, exogenous, linear, feedback, history, inverse_scales };
+    dispatch(&state, samples, steps, time_step, consume).map_err(BatchError::Diverged)
 }
 
 /// Why a batch failed.
@@ -131,87 +162,81 @@ pub enum BatchError {
     Diverged(Divergence),
 }
 
-/// A term with its sources resolved: which mode's output it reads, at which lags.
+/// A term with its sources resolved and its coefficient in every lane.
 #[derive(Debug, Clone, Copy)]
 struct Compiled {
-    output_mode: usize,
+    /// The mode whose output the term reads.
+    source: usize,
     output_lag: usize,
     output_power: u32,
     input_lag: usize,
     input_power: u32,
-}
-
-impl Compiled {
-    fn of(term: &NarxTerm, mode: usize) -> Compiled {
-        Compiled {
-            output_mode: term.output_mode.unwrap_or(mode),
-            output_lag: term.output_lag,
-            output_power: term.output_power,
-            input_lag: term.input_lag,
-            input_power: term.input_power,
-        }
-    }
+    coefficient: Lanes,
 }
 
 struct State {
-    theta: Vec<Vec<Lanes>>,
     rests: Vec<Lanes>,
-    compiled: Vec<Vec<Compiled>>,
+    /// Per mode, the terms that read only the input (and the constant): summed for a whole block
+    /// before the recursion, off its critical path.
+    exogenous: Vec<Vec<Compiled>>,
+    /// Per mode, the terms c·y_source(t − lag), the common case, as (how far back in `outputs`, c).
+    linear: Vec<Vec<(usize, Lanes)>>,
+    /// Per mode, the other terms that read an output.
+    feedback: Vec<Vec<Compiled>>,
     /// Longest lag: the steps each block carries over from the one before.
     history: usize,
+    inverse_scales: Vec<f64>,
 }
 
 fn dispatch(
     state: &State,
-    programs: &[ModeProgram],
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[&[Lanes]]),
+    consume: &mut dyn FnMut(usize, &[Lanes]),
 ) -> std::result::Result<(), Divergence> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the processor has the features the function is compiled for.
-            return unsafe { recurse_avx512(state, programs, samples, steps, time_step, consume) };
+            return unsafe { recurse_avx512(state, samples, steps, time_step, consume) };
         }
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { recurse_avx2(state, programs, samples, steps, time_step, consume) };
+            return unsafe { recurse_avx2(state, samples, steps, time_step, consume) };
         }
     }
-    recurse(state, programs, samples, steps, time_step, consume)
+    recurse(state, samples, steps, time_step, consume)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 unsafe fn recurse_avx512(
     state: &State,
-    programs: &[ModeProgram],
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[&[Lanes]]),
+    consume: &mut dyn FnMut(usize, &[Lanes]),
 ) -> std::result::Result<(), Divergence> {
-    recurse(state, programs, samples, steps, time_step, consume)
+    recurse(state, samples, steps, time_step, consume)
 }
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn recurse_avx2(
     state: &State,
-    programs: &[ModeProgram],
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[&[Lanes]]),
+    consume: &mut dyn FnMut(usize, &[Lanes]),
 ) -> std::result::Result<(), Divergence> {
-    recurse(state, programs, samples, steps, time_step, consume)
+    recurse(state, samples, steps, time_step, consume)
 }
 
 #[inline(always)]
 fn power(x: &Lanes, p: u32) -> Lanes {
     match p {
+        0 => [1.0; LANES],
         1 => *x,
         2 => std::array::from_fn(|l| x[l] * x[l]),
         3 => std::array::from_fn(|l| x[l] * x[l] * x[l]),
@@ -219,37 +244,113 @@ fn power(x: &Lanes, p: u32) -> Lanes {
     }
 }
 
-/// The recursion itself. `inputs[m]` and `outputs[m]` hold `history` carried-over steps, then the
-/// block; before t = 0 the outputs are at rest and the input deviations zero.
+/// The scaled input deviations of every lane on the generation grid, lane-major, so that one
+/// interpolation serves all lanes at once: coarse[m][q][lane]. `None` unless every sample comes
+/// from the same coarse grid.
+fn coarse_inputs(samples: &[BatchSample], inverse_scales: &[f64]) -> Option<(f64, Vec<Vec<Lanes>>)> {
+    let step = samples.first()?.forces.coarse()?.step;
+    let all: Vec<&CoarseSeries> = samples.iter().map(|s| s.forces.coarse()).collect::<Option<_>>()?;
+    let points = all[0].series[0].len();
+    if all.iter().any(|c| c.step != step || c.series[0].len() != points) {
+        return None;
+    }
+    let lanes = inverse_scales
+        .iter()
+        .enumerate()
+        .map(|(m, scale)| {
+            let series: Vec<&[f64]> = all.iter().map(|c| &c.series[m][..]).collect();
+            (0..points)
+                .map(|q| {
+                    let mut to = [0.0; LANES];
+                    for (t, x) in to.iter_mut().zip(&series) {
+                        *t = x[q] * scale;
+                    }
+                    to
+                })
+                .collect()
+        })
+        .collect();
+    Some((step, lanes))
+}
+
+/// Fills mode m's scaled input deviations for a block, every lane: by one interpolation of the
+/// lane-major coarse inputs, or sample by sample from their own sources.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn fill_inputs(
+    samples: &[BatchSample],
+    m: usize,
+    inverse_scale: f64,
+    time_step: f64,
+    first: usize,
+    coarse: Option<(&InterpolationPlan, &[Lanes])>,
+    forces: &mut [f64],
+    inputs: &mut [Lanes],
+) {
+    if let Some((plan, coarse)) = coarse {
+        for (input, (p, w)) in inputs.iter_mut().zip(plan.points()) {
+            let y = &coarse[p..p + 4];
+            *input = std::array::from_fn(|l| w[0] * y[0][l] + w[1] * y[1][l] + w[2] * y[2][l] + w[3] * y[3][l]);
+        }
+        return;
+    }
+    for (lane, sample) in samples.iter().enumerate() {
+        let mean = sample.forces.mean(m);
+        sample.forces.fill(m, time_step, first, forces);
+        for (input, f) in inputs.iter_mut().zip(forces.iter()) {
+            input[lane] = (f - mean) * inverse_scale;
+        }
+    }
+}
+
+/// The recursion itself. `inputs[m]` holds `history` carried-over steps, then the block; `outputs`
+/// the same for all modes interleaved, outputs[(h + i)·modes + m]. Before t = 0 the outputs are at
+/// rest and the input deviations zero.
 #[inline(always)]
 fn recurse(
     state: &State,
-    programs: &[ModeProgram],
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[&[Lanes]]),
+    consume: &mut dyn FnMut(usize, &[Lanes]),
 ) -> std::result::Result<(), Divergence> {
-    let modes = programs.len();
+    let modes = state.rests.len();
     let h = state.history;
+    let coarse = coarse_inputs(samples, &state.inverse_scales);
     let mut inputs: Vec<Vec<Lanes>> = vec![vec![[0.0; LANES]; h + BLOCK]; modes];
-    let mut outputs: Vec<Vec<Lanes>> = (0..modes).map(|m| vec![state.rests[m]; h + BLOCK]).collect();
+    let mut outputs: Vec<Lanes> = (0..(h + BLOCK) * modes).map(|k| state.rests[k % modes]).collect();
+    let mut exogenous: Vec<Vec<Lanes>> = vec![vec![[0.0; LANES]; BLOCK]; modes];
     let mut forces = vec![0.0; BLOCK];
-    let mut out_of_bounds = [false; LANES];
     let mut first = 0;
     while first < steps {
         let len = BLOCK.min(steps - first);
+        let plan = coarse.as_ref().map(|(step, _)| InterpolationPlan::new(*step, time_step, first, len));
+        outputs.copy_within(BLOCK * modes.., 0);
         for m in 0..modes {
-            let carried = inputs[m].len() - h;
-            inputs[m].copy_within(carried.., 0);
-            let carried = outputs[m].len() - h;
-            outputs[m].copy_within(carried.., 0);
-            let inverse_scale = 1.0 / programs[m].input_scale;
-            for (lane, sample) in samples.iter().enumerate() {
-                let mean = sample.forces.mean(m);
-                sample.forces.fill(m, time_step, first, &mut forces[..len]);
-                for (input, f) in inputs[m][h..h + len].iter_mut().zip(&forces[..len]) {
-                    input[lane] = (f - mean) * inverse_scale;
+            inputs[m].copy_within(BLOCK.., 0);
+            let (scale, block) = (state.inverse_scales[m], &mut inputs[m][h..h + len]);
+            let from_coarse = plan.as_ref().zip(coarse.as_ref()).map(|(plan, (_, lanes))| (plan, &lanes[m][..]));
+            fill_inputs(samples, m, scale, time_step, first, from_coarse, &mut forces[..len], block);
+            // The input terms of the whole block, before the recursion.
+            let sums = &mut exogenous[m][..len];
+            sums.iter_mut().for_each(|s| *s = [0.0; LANES]);
+            for term in &state.exogenous[m] {
+                let (c, p) = (&term.coefficient, term.input_power);
+                let series = &inputs[m][h - term.input_lag..h - term.input_lag + len];
+                // The common powers each get a loop of their own, which the compiler vectorises.
+                match p {
+                    0 => sums.iter_mut().for_each(|sum| (0..LANES).for_each(|l| sum[l] += c[l])),
+                    1 => {
+                        for (sum, q) in sums.iter_mut().zip(series) {
+                            (0..LANES).for_each(|l| sum[l] += c[l] * q[l]);
+                        }
+                    }
+                    _ => {
+                        for (sum, q) in sums.iter_mut().zip(series) {
+                            let g = power(q, p);
+                            (0..LANES).for_each(|l| sum[l] += c[l] * g[l]);
+                        }
+                    }
                 }
             }
         }
@@ -259,45 +360,57 @@ fn recurse(
                 continue;
             }
             for m in 0..modes {
-                let mut value = [0.0; LANES];
-                for (term, c) in state.compiled[m].iter().zip(&state.theta[m]) {
-                    let g: Lanes = match (term.output_power, term.input_power) {
-                        (0, 0) => [1.0; LANES],
-                        (0, q) => power(&inputs[m][h + i - term.input_lag], q),
-                        (y, 0) => power(&outputs[term.output_mode][h + i - term.output_lag], y),
-                        (y, q) => {
-                            let a = power(&outputs[term.output_mode][h + i - term.output_lag], y);
-                            let b = power(&inputs[m][h + i - term.input_lag], q);
-                            std::array::from_fn(|l| a[l] * b[l])
-                        }
-                    };
+                let mut value = exogenous[m][i];
+                let here = (h + i) * modes;
+                for (back, c) in &state.linear[m] {
+                    let y = &outputs[here - back];
                     for l in 0..LANES {
-                        value[l] += c[l] * g[l];
+                        value[l] += c[l] * y[l];
                     }
                 }
-                for l in 0..LANES {
-                    // Written so that a NaN counts as out of bounds.
-                    out_of_bounds[l] |= !(value[l].abs() <= DIVERGENCE_BOUND);
+                for term in &state.feedback[m] {
+                    let y = power(&outputs[(h + i - term.output_lag) * modes + term.source], term.output_power);
+                    let g = if term.input_power == 0 {
+                        y
+                    } else {
+                        let q = power(&inputs[m][h + i - term.input_lag], term.input_power);
+                        std::array::from_fn(|l| y[l] * q[l])
+                    };
+                    for l in 0..LANES {
+                        value[l] += term.coefficient[l] * g[l];
+                    }
                 }
-                outputs[m][h + i] = value;
+                outputs[(h + i) * modes + m] = value;
             }
         }
-        // Checked once a block, then located: the lanes never branch apart inside the recursion.
-        if let Some(lane) = out_of_bounds.iter().position(|&b| b) {
-            return Err(first_divergence(&outputs, h, first, len).unwrap_or(Divergence { lane, mode: 0, step: first }));
+        // Checked once a block, so that the lanes never branch apart inside the recursion.
+        if let Some(divergence) = first_divergence(&outputs, modes, h, first, len) {
+            return Err(divergence);
         }
-        let view: Vec<&[Lanes]> = outputs.iter().map(|o| &o[h..h + len]).collect();
-        consume(first, &view);
+        consume(first, &outputs[h * modes..(h + len) * modes]);
         first += len;
     }
     Ok(())
 }
 
-/// The earliest (step, mode, lane) of a block whose output left the bound.
-fn first_divergence(outputs: &[Vec<Lanes>], h: usize, first: usize, len: usize) -> Option<Divergence> {
-    (0..len).find_map(|i| {
-        outputs.iter().enumerate().find_map(|(mode, series)| {
-            series[h + i].iter().position(|&v| diverged(v)).map(|lane| Divergence { lane, mode, step: first + i })
+/// The earliest (step, mode, lane) of a block whose output left the bound (a NaN counts as out).
+fn first_divergence(outputs: &[Lanes], modes: usize, h: usize, first: usize, len: usize) -> Option<Divergence> {
+    let block = &outputs[h * modes..(h + len) * modes];
+    // A branch-free pass over the block first; the search only where it failed.
+    let mut sane = true;
+    for lanes in block {
+        for v in lanes {
+            sane &= v.abs() <= DIVERGENCE_BOUND;
+        }
+    }
+    if sane {
+        return None;
+    }
+    block.iter().enumerate().find_map(|(k, lanes)| {
+        lanes.iter().position(|&v| diverged(v)).map(|lane| Divergence {
+            lane,
+            mode: k % modes,
+            step: first + k / modes,
         })
     })
 }
@@ -324,11 +437,9 @@ mod tests {
             .collect();
         let mut got = vec![vec![vec![0.0; steps]; 2]; 3];
         run(&programs, &samples, steps, 0.01, &mut |first, outputs| {
-            for (m, series) in outputs.iter().enumerate() {
-                for (i, lanes) in series.iter().enumerate() {
-                    for (lane, history) in got.iter_mut().enumerate() {
-                        history[m][first + i] = lanes[lane];
-                    }
+            for (k, lanes) in outputs.iter().enumerate() {
+                for (lane, history) in got.iter_mut().enumerate() {
+                    history[k % 2][first + k / 2] = lanes[lane];
                 }
             }
         })

@@ -159,12 +159,11 @@ impl Metamodel {
         let steps = problem.storm.steps();
         let mut out = vec![vec![0.0; steps]; self.models.len()];
         let samples = [BatchSample { theta, forces }];
+        let modes = self.models.len();
         batch::run(&self.programs(), &samples, steps, problem.storm.time_step, &mut |first, outputs| {
-            for (m, series) in outputs.iter().enumerate() {
-                let scale = self.models[m].output_scale;
-                for (o, lanes) in out[m][first..].iter_mut().zip(series.iter()) {
-                    *o = levels[m] + lanes[0] * scale;
-                }
+            for (k, lanes) in outputs.iter().enumerate() {
+                let m = k % modes;
+                out[m][first + k / modes] = levels[m] + lanes[0] * self.models[m].output_scale;
             }
         })
         .map_err(|e| batch_error(e, &[None]))?;
@@ -195,19 +194,17 @@ impl Metamodel {
             }
         }
         let mut peaks = [0.0f64; LANES];
-        let mut response: Vec<Lanes> = Vec::new();
+        let modes = self.models.len();
+        let terms: Vec<(f64, f64, Lanes)> =
+            (0..modes).map(|m| (weights[m], self.models[m].output_scale, levels_by_mode[m])).collect();
         batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, &mut |_, outputs| {
-            response.clear();
-            response.resize(outputs[0].len(), [0.0; LANES]);
-            for (m, series) in outputs.iter().enumerate() {
-                let (w, scale, level) = (weights[m], self.models[m].output_scale, &levels_by_mode[m]);
-                for (u, y) in response.iter_mut().zip(series.iter()) {
+            for step in outputs.chunks_exact(modes) {
+                let mut u = [0.0; LANES];
+                for (y, (w, scale, level)) in step.iter().zip(&terms) {
                     for l in 0..LANES {
                         u[l] += w * (level[l] + y[l] * scale);
                     }
                 }
-            }
-            for u in &response {
                 for l in 0..LANES {
                     peaks[l] = peaks[l].max(u[l].abs());
                 }

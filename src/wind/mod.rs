@@ -12,5 +12,5 @@ mod spectrum;
 pub use forces::{FloorForces, ModalForces, WindLoads};
 pub use modal::{CoarseModalForces, ModalWind};
 pub use site::{StormGrid, WindSite};
-pub use spectral::{CoarseSeries, CrossSpectralDensity, SpectralGrid, simulate, simulate_coarse};
+pub use spectral::{CoarseSeries, CrossSpectralDensity, InterpolationPlan, SpectralGrid, simulate, simulate_coarse};
 pub use spectrum::{FieldSpectrum, ProjectedSpectrum};

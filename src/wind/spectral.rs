@@ -14,6 +14,7 @@ use crate::uncertainty::Rng;
 use rand::RngExt;
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
+use std::cell::RefCell;
 use std::f64::consts::PI;
 
 /// A cross-spectral density evaluated along an arithmetic sequence of frequencies.
@@ -43,6 +44,11 @@ impl SpectralGrid {
     }
 }
 
+thread_local! {
+    /// Plans (and their twiddle factors) are computed once per length and thread, not per storm.
+    static PLANNER: RefCell<FftPlanner<f64>> = RefCell::new(FftPlanner::new());
+}
+
 /// One realization on its generation grid: `series[j][q]` is component j at t = (q − 1)·step, so
 /// that cubic interpolation has a neighbour before t = 0 and two after the end.
 #[derive(Debug, Clone)]
@@ -52,20 +58,67 @@ pub struct CoarseSeries {
 }
 
 impl CoarseSeries {
-    /// Component j at instants first, first + 1, … of a grid of step `time_step`, into `out`.
+    /// Component j at instants first, first + 1, … of a grid of step `time_step`, plus `offset`.
     pub fn interpolate_into(&self, j: usize, time_step: f64, first: usize, offset: f64, out: &mut [f64]) {
-        interpolate_cubic(&self.series[j], self.step, time_step, first, offset, out);
+        InterpolationPlan::new(self.step, time_step, first, out.len()).apply(&self.series[j], offset, out);
     }
 
     /// Every component on `storm`'s grid.
     pub fn on_grid(&self, storm: &StormGrid) -> Vec<Vec<f64>> {
-        (0..self.series.len())
-            .map(|j| {
+        let plan = InterpolationPlan::new(self.step, storm.time_step, 0, storm.steps());
+        self.series
+            .iter()
+            .map(|coarse| {
                 let mut out = vec![0.0; storm.steps()];
-                self.interpolate_into(j, storm.time_step, 0, 0.0, &mut out);
+                plan.apply(coarse, 0.0, &mut out);
                 out
             })
             .collect()
+    }
+}
+
+/// Where instants first, first + 1, … of a grid of step `time_step` fall on a generation grid of
+/// step dt_g whose first point is at −dt_g: each one's first coarse neighbour and the four weights of
+/// Keys' cubic convolution (a = −½). One plan serves every component and every sample on the same
+/// grids; a weight depends only on its instant, so values do not depend on where a block starts.
+#[derive(Debug, Clone)]
+pub struct InterpolationPlan {
+    start: Vec<usize>,
+    weights: Vec<[f64; 4]>,
+}
+
+impl InterpolationPlan {
+    pub fn new(dt_g: f64, time_step: f64, first: usize, len: usize) -> Self {
+        let ratio = time_step / dt_g;
+        let (start, weights) = (first..first + len)
+            .map(|i| {
+                let x = i as f64 * ratio;
+                // x ≥ 0, so truncation is the floor; coarse point p is at t = (p − 1)·dt_g.
+                let p = x as usize;
+                let f = x - p as f64;
+                let weights = [
+                    0.5 * f * (-1.0 + f * (2.0 - f)),
+                    0.5 * (2.0 + f * f * (-5.0 + 3.0 * f)),
+                    0.5 * f * (1.0 + f * (4.0 - 3.0 * f)),
+                    0.5 * f * f * (f - 1.0),
+                ];
+                (p, weights)
+            })
+            .unzip();
+        InterpolationPlan { start, weights }
+    }
+
+    /// Each instant's first coarse neighbour and its four weights.
+    pub fn points(&self) -> impl Iterator<Item = (usize, &[f64; 4])> {
+        self.start.iter().copied().zip(&self.weights)
+    }
+
+    /// offset + the interpolated `coarse` at the plan's instants, into `out`.
+    pub fn apply(&self, coarse: &[f64], offset: f64, out: &mut [f64]) {
+        for ((o, &p), w) in out.iter_mut().zip(&self.start).zip(&self.weights) {
+            let y = &coarse[p..p + 4];
+            *o = offset + (w[0] * y[0] + w[1] * y[1] + w[2] * y[2] + w[3] * y[3]);
+        }
     }
 }
 
@@ -113,7 +166,7 @@ pub fn simulate_coarse(
     let count = ((duration + PI / grid.cutoff) / dt_g).ceil() as usize + 4;
 
     let mut coarse = vec![vec![0.0; count]; n];
-    let fft = FftPlanner::<f64>::new().plan_fft_inverse(fft_len);
+    let fft = PLANNER.with(|planner| planner.borrow_mut().plan_fft_inverse(fft_len));
     let mut buffer = vec![Complex::new(0.0, 0.0); fft_len];
     let mut scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
     let mut factor = vec![0.0; n * n];
@@ -172,29 +225,6 @@ fn fft_friendly(n: usize) -> usize {
         p5 *= 5;
     }
     best
-}
-
-/// Keys' cubic convolution (a = −½) from a coarse series whose first entry is at t = −dt_g: writes
-/// offset + the value at instants first, first + 1, … of a grid of step `time_step`. At a coarse
-/// instant it returns the coarse value exactly. The cubic of each coarse interval is formed once
-/// for all the instants inside it, so a value does not depend on where a block starts.
-fn interpolate_cubic(coarse: &[f64], dt_g: f64, time_step: f64, first: usize, offset: f64, out: &mut [f64]) {
-    let ratio = time_step / dt_g;
-    let mut interval = usize::MAX;
-    let (mut y1, mut a, mut b, mut c) = (0.0, 0.0, 0.0, 0.0);
-    for (i, o) in (first..).zip(out.iter_mut()) {
-        let x = i as f64 * ratio;
-        // x ≥ 0, so truncation is the floor.
-        let p = x as usize;
-        let f = x - p as f64;
-        if p != interval {
-            interval = p;
-            let w = &coarse[p..p + 4];
-            let (y0, y_1, y2, y3) = (w[0], w[1], w[2], w[3]);
-            (y1, a, b, c) = (y_1, y2 - y0, 2.0 * y0 - 5.0 * y_1 + 4.0 * y2 - y3, 3.0 * (y_1 - y2) + y3 - y0);
-        }
-        *o = offset + (y1 + 0.5 * f * (a + f * (b + f * c)));
-    }
 }
 
 #[cfg(test)]
@@ -279,7 +309,7 @@ mod tests {
             })
             .collect();
         let mut fine = vec![0.0; 201];
-        interpolate_cubic(&coarse, dt_g, 0.01, 0, 0.0, &mut fine);
+        InterpolationPlan::new(dt_g, 0.01, 0, 201).apply(&coarse, 0.0, &mut fine);
         for (i, y) in fine.iter().enumerate() {
             let t = i as f64 * 0.01;
             assert!((y - (1.0 + 2.0 * t - 3.0 * t * t)).abs() < 1e-12);
