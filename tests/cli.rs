@@ -162,3 +162,25 @@ fn custom_structure_runs() {
     assert!(v["inputs"].get("damper_c2").is_none());
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `windmeta bench --json` at a small size: every row measured, the headline figures present and
+/// consistent with the rows they come from (not their values: speed is never asserted in a test).
+#[test]
+fn bench_reports_rows_and_headline_figures() {
+    let args = ["bench", "--duration", "60", "--experiments", "24", "--samples", "16", "--repetitions", "1", "--json"];
+    let report = json(&args);
+    let rows = report["rows"].as_array().unwrap();
+    let stage = |prefix: &str| -> f64 {
+        rows.iter().find(|r| r["stage"].as_str().unwrap().starts_with(prefix)).unwrap()["median_seconds"]
+            .as_f64()
+            .unwrap()
+    };
+    assert!(rows.iter().all(|r| r["median_seconds"].as_f64().unwrap() > 0.0), "{rows:?}");
+    let reduced = stage("per sample: reduced-order reference");
+    let metamodel = stage("per sample: metamodel free run");
+    let ratio = report["metamodel_speedup_vs_reduced_reference"].as_f64().unwrap();
+    assert!((ratio - reduced / metamodel).abs() <= 1e-9 * ratio);
+    assert_eq!(report["calibration_seconds"].as_f64().unwrap(), stage("calibration, K = 24"));
+    assert_eq!(report["exceedance_10k_seconds"].as_f64().unwrap(), stage("exceedance curve, 16 samples"));
+    refused(&["bench", "--preset", "frame41"], "unknown preset");
+}

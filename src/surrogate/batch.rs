@@ -13,7 +13,7 @@
 
 use super::narx::{DIVERGENCE_BOUND, NarxTerm, diverged, rest_output};
 use crate::error::{Error, Result};
-use crate::wind::{CoarseModalForces, CoarseSeries, InterpolationPlan, ModalForces};
+use crate::wind::{CoarseModalForces, CoarseSeries, ModalForces, cubic_point};
 
 /// Samples per batch: one AVX-512 register of f64, two AVX2 ones.
 pub const LANES: usize = 8;
@@ -94,16 +94,25 @@ pub fn joint_rest(models: &[(&[NarxTerm], &[f64])]) -> Result<Vec<f64>> {
     Ok(rests)
 }
 
-/// Runs up to [`LANES`] samples over `steps` steps of `time_step` and hands every block of scaled
-/// outputs to `consume(first, outputs)`, `outputs[i·modes + m]` being mode m at step first + i, one
-/// value per lane. Lanes beyond `samples.len()` run a zero model. Fails on a lane's divergence,
-/// naming it.
+/// What a batch produces from its scaled outputs ŷ.
+pub enum Sink<'a> {
+    /// Every block to `consume(first, outputs)`, `outputs[i·modes + m]` being mode m at step
+    /// first + i, one value per lane.
+    Blocks(&'a mut dyn FnMut(usize, &[Lanes])),
+    /// Per lane the peak over the storm of |offset + Σ_m gain_m ŷ_m| (a response u = Σ_m w_m y_m
+    /// with y_m = level_m + scale_m ŷ_m: gain_m = w_m scale_m, offset = Σ_m w_m level_m), formed
+    /// inside the batch's own vectorised code.
+    Peaks { gains: &'a [f64], offsets: Lanes, peaks: &'a mut Lanes },
+}
+
+/// Runs up to [`LANES`] samples over `steps` steps of `time_step` into `sink`. Lanes beyond
+/// `samples.len()` run a zero model. Fails on a lane's divergence, naming it.
 pub fn run(
     programs: &[ModeProgram],
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[Lanes]),
+    sink: &mut Sink,
 ) -> std::result::Result<(), BatchError> {
     assert!(samples.len() <= LANES, "at most {LANES} samples per batch");
     let modes = programs.len();
@@ -148,7 +157,7 @@ pub fn run(
         programs.iter().flat_map(|p| p.terms.iter()).map(|t| t.output_lag.max(t.input_lag)).max().unwrap_or(0);
     let inverse_scales = programs.iter().map(|p| 1.0 / p.input_scale).collect();
     let state = State { rests, exogenous, linear, feedback, history, inverse_scales };
-    dispatch(&state, samples, steps, time_step, consume).map_err(BatchError::Diverged)
+    dispatch(&state, samples, steps, time_step, sink).map_err(BatchError::Diverged)
 }
 
 /// Why a batch failed.
@@ -176,8 +185,8 @@ struct Compiled {
 
 struct State {
     rests: Vec<Lanes>,
-    /// Per mode, the terms that read only the input (and the constant): summed for a whole block
-    /// before the recursion, off its critical path.
+    /// Per mode, the terms that read only the input (and the constant); they come first in a step,
+    /// off the critical path of the recursion.
     exogenous: Vec<Vec<Compiled>>,
     /// Per mode, the terms c·y_source(t − lag), the common case, as (how far back in `outputs`, c).
     linear: Vec<Vec<(usize, Lanes)>>,
@@ -193,20 +202,20 @@ fn dispatch(
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[Lanes]),
+    sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
     #[cfg(target_arch = "x86_64")]
     {
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the processor has the features the function is compiled for.
-            return unsafe { recurse_avx512(state, samples, steps, time_step, consume) };
+            return unsafe { recurse_avx512(state, samples, steps, time_step, sink) };
         }
         if std::arch::is_x86_feature_detected!("avx2") {
             // SAFETY: as above.
-            return unsafe { recurse_avx2(state, samples, steps, time_step, consume) };
+            return unsafe { recurse_avx2(state, samples, steps, time_step, sink) };
         }
     }
-    recurse(state, samples, steps, time_step, consume)
+    recurse(state, samples, steps, time_step, sink)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -216,9 +225,9 @@ unsafe fn recurse_avx512(
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[Lanes]),
+    sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
-    recurse(state, samples, steps, time_step, consume)
+    recurse(state, samples, steps, time_step, sink)
 }
 
 #[cfg(target_arch = "x86_64")]
@@ -228,9 +237,9 @@ unsafe fn recurse_avx2(
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[Lanes]),
+    sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
-    recurse(state, samples, steps, time_step, consume)
+    recurse(state, samples, steps, time_step, sink)
 }
 
 #[inline(always)]
@@ -244,67 +253,59 @@ fn power(x: &Lanes, p: u32) -> Lanes {
     }
 }
 
-/// The scaled input deviations of every lane on the generation grid, lane-major, so that one
-/// interpolation serves all lanes at once: coarse[m][q][lane]. `None` unless every sample comes
-/// from the same coarse grid.
-fn coarse_inputs(samples: &[BatchSample], inverse_scales: &[f64]) -> Option<(f64, Vec<Vec<Lanes>>)> {
-    let step = samples.first()?.forces.coarse()?.step;
-    let all: Vec<&CoarseSeries> = samples.iter().map(|s| s.forces.coarse()).collect::<Option<_>>()?;
-    let points = all[0].series[0].len();
-    if all.iter().any(|c| c.step != step || c.series[0].len() != points) {
-        return None;
+/// The scaled input deviations of every lane, lane-major so that one interpolation serves all lanes:
+/// `(ratio, inputs)` with inputs[m][q][lane] the value at coarse point q (at t = (q − 1)·dt_g) and
+/// `ratio` = time_step / dt_g. Samples from one generation grid are taken as they are; any others
+/// are filled on the storm's grid and padded, which the same interpolation then reads exactly
+/// (ratio 1, weights 0, 1, 0, 0).
+fn lane_inputs(
+    samples: &[BatchSample],
+    inverse_scales: &[f64],
+    steps: usize,
+    time_step: f64,
+) -> (f64, Vec<Vec<Lanes>>) {
+    let transpose = |series: &[Vec<f64>], scale: f64| -> Vec<Lanes> {
+        (0..series[0].len())
+            .map(|q| {
+                let mut to = [0.0; LANES];
+                for (t, x) in to.iter_mut().zip(series) {
+                    *t = x[q] * scale;
+                }
+                to
+            })
+            .collect()
+    };
+    let coarse: Option<Vec<&CoarseSeries>> = samples.iter().map(|s| s.forces.coarse()).collect();
+    if let Some(all) =
+        coarse.filter(|all| all.iter().all(|c| c.step == all[0].step && c.series[0].len() == all[0].series[0].len()))
+        && let Some(step) = all.first().map(|c| c.step)
+    {
+        let inputs = (0..inverse_scales.len())
+            .map(|m| transpose(&all.iter().map(|c| c.series[m].clone()).collect::<Vec<_>>(), inverse_scales[m]))
+            .collect();
+        return (time_step / step, inputs);
     }
-    let lanes = inverse_scales
-        .iter()
-        .enumerate()
-        .map(|(m, scale)| {
-            let series: Vec<&[f64]> = all.iter().map(|c| &c.series[m][..]).collect();
-            (0..points)
-                .map(|q| {
-                    let mut to = [0.0; LANES];
-                    for (t, x) in to.iter_mut().zip(&series) {
-                        *t = x[q] * scale;
-                    }
-                    to
+    let inputs = (0..inverse_scales.len())
+        .map(|m| {
+            let padded: Vec<Vec<f64>> = samples
+                .iter()
+                .map(|sample| {
+                    let mut series = vec![0.0; steps + 3];
+                    sample.forces.fill(m, time_step, 0, &mut series[1..=steps]);
+                    let mean = sample.forces.mean(m);
+                    series[1..=steps].iter_mut().for_each(|f| *f -= mean);
+                    series
                 })
-                .collect()
+                .collect();
+            if padded.is_empty() { vec![[0.0; LANES]; steps + 3] } else { transpose(&padded, inverse_scales[m]) }
         })
         .collect();
-    Some((step, lanes))
+    (1.0, inputs)
 }
 
-/// Fills mode m's scaled input deviations for a block, every lane: by one interpolation of the
-/// lane-major coarse inputs, or sample by sample from their own sources.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn fill_inputs(
-    samples: &[BatchSample],
-    m: usize,
-    inverse_scale: f64,
-    time_step: f64,
-    first: usize,
-    coarse: Option<(&InterpolationPlan, &[Lanes])>,
-    forces: &mut [f64],
-    inputs: &mut [Lanes],
-) {
-    if let Some((plan, coarse)) = coarse {
-        for (input, (p, w)) in inputs.iter_mut().zip(plan.points()) {
-            let y = &coarse[p..p + 4];
-            *input = std::array::from_fn(|l| w[0] * y[0][l] + w[1] * y[1][l] + w[2] * y[2][l] + w[3] * y[3][l]);
-        }
-        return;
-    }
-    for (lane, sample) in samples.iter().enumerate() {
-        let mean = sample.forces.mean(m);
-        sample.forces.fill(m, time_step, first, forces);
-        for (input, f) in inputs.iter_mut().zip(forces.iter()) {
-            input[lane] = (f - mean) * inverse_scale;
-        }
-    }
-}
-
-/// The recursion itself. `inputs[m]` holds `history` carried-over steps, then the block; `outputs`
-/// the same for all modes interleaved, outputs[(h + i)·modes + m]. Before t = 0 the outputs are at
+/// The recursion itself, every step: the modes' inputs interpolated from the lane-major coarse
+/// inputs, then each mode's terms. `inputs` and `outputs` hold `history` carried-over steps, then
+/// the block, the modes interleaved: outputs[(h + i)·modes + m]. Before t = 0 the outputs are at
 /// rest and the input deviations zero.
 #[inline(always)]
 fn recurse(
@@ -312,56 +313,42 @@ fn recurse(
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    consume: &mut dyn FnMut(usize, &[Lanes]),
+    sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
     let modes = state.rests.len();
     let h = state.history;
-    let coarse = coarse_inputs(samples, &state.inverse_scales);
-    let mut inputs: Vec<Vec<Lanes>> = vec![vec![[0.0; LANES]; h + BLOCK]; modes];
+    let (ratio, coarse) = lane_inputs(samples, &state.inverse_scales, steps, time_step);
+    let mut inputs: Vec<Lanes> = vec![[0.0; LANES]; (h + BLOCK) * modes];
     let mut outputs: Vec<Lanes> = (0..(h + BLOCK) * modes).map(|k| state.rests[k % modes]).collect();
-    let mut exogenous: Vec<Vec<Lanes>> = vec![vec![[0.0; LANES]; BLOCK]; modes];
-    let mut forces = vec![0.0; BLOCK];
     let mut first = 0;
     while first < steps {
         let len = BLOCK.min(steps - first);
-        let plan = coarse.as_ref().map(|(step, _)| InterpolationPlan::new(*step, time_step, first, len));
         outputs.copy_within(BLOCK * modes.., 0);
-        for m in 0..modes {
-            inputs[m].copy_within(BLOCK.., 0);
-            let (scale, block) = (state.inverse_scales[m], &mut inputs[m][h..h + len]);
-            let from_coarse = plan.as_ref().zip(coarse.as_ref()).map(|(plan, (_, lanes))| (plan, &lanes[m][..]));
-            fill_inputs(samples, m, scale, time_step, first, from_coarse, &mut forces[..len], block);
-            // The input terms of the whole block, before the recursion.
-            let sums = &mut exogenous[m][..len];
-            sums.iter_mut().for_each(|s| *s = [0.0; LANES]);
-            for term in &state.exogenous[m] {
-                let (c, p) = (&term.coefficient, term.input_power);
-                let series = &inputs[m][h - term.input_lag..h - term.input_lag + len];
-                // The common powers each get a loop of their own, which the compiler vectorises.
-                match p {
-                    0 => sums.iter_mut().for_each(|sum| (0..LANES).for_each(|l| sum[l] += c[l])),
-                    1 => {
-                        for (sum, q) in sums.iter_mut().zip(series) {
-                            (0..LANES).for_each(|l| sum[l] += c[l] * q[l]);
-                        }
-                    }
-                    _ => {
-                        for (sum, q) in sums.iter_mut().zip(series) {
-                            let g = power(q, p);
-                            (0..LANES).for_each(|l| sum[l] += c[l] * g[l]);
-                        }
-                    }
-                }
-            }
-        }
+        inputs.copy_within(BLOCK * modes.., 0);
         for i in 0..len {
             let t = first + i;
+            let here = (h + i) * modes;
+            let (p, w) = cubic_point(t, ratio);
+            for (m, lanes) in coarse.iter().enumerate() {
+                let y = &lanes[p..p + 4];
+                inputs[here + m] =
+                    std::array::from_fn(|l| w[0] * y[0][l] + w[1] * y[1][l] + w[2] * y[2][l] + w[3] * y[3][l]);
+            }
             if t == 0 {
                 continue;
             }
             for m in 0..modes {
-                let mut value = exogenous[m][i];
-                let here = (h + i) * modes;
+                let mut value = [0.0; LANES];
+                for term in &state.exogenous[m] {
+                    let c = &term.coefficient;
+                    match term.input_power {
+                        0 => (0..LANES).for_each(|l| value[l] += c[l]),
+                        p => {
+                            let g = power(&inputs[here - term.input_lag * modes + m], p);
+                            (0..LANES).for_each(|l| value[l] += c[l] * g[l]);
+                        }
+                    }
+                }
                 for (back, c) in &state.linear[m] {
                     let y = &outputs[here - back];
                     for l in 0..LANES {
@@ -369,25 +356,37 @@ fn recurse(
                     }
                 }
                 for term in &state.feedback[m] {
-                    let y = power(&outputs[(h + i - term.output_lag) * modes + term.source], term.output_power);
-                    let g = if term.input_power == 0 {
-                        y
-                    } else {
-                        let q = power(&inputs[m][h + i - term.input_lag], term.input_power);
-                        std::array::from_fn(|l| y[l] * q[l])
-                    };
+                    let y = power(&outputs[here - term.output_lag * modes + term.source], term.output_power);
+                    let q = power(&inputs[here - term.input_lag * modes + m], term.input_power);
                     for l in 0..LANES {
-                        value[l] += term.coefficient[l] * g[l];
+                        value[l] += term.coefficient[l] * (y[l] * q[l]);
                     }
                 }
-                outputs[(h + i) * modes + m] = value;
+                outputs[here + m] = value;
             }
         }
         // Checked once a block, so that the lanes never branch apart inside the recursion.
         if let Some(divergence) = first_divergence(&outputs, modes, h, first, len) {
             return Err(divergence);
         }
-        consume(first, &outputs[h * modes..(h + len) * modes]);
+        let block = &outputs[h * modes..(h + len) * modes];
+        match sink {
+            Sink::Blocks(consume) => consume(first, block),
+            Sink::Peaks { gains, offsets, peaks } => {
+                for step in block.chunks_exact(modes) {
+                    let mut u = *offsets;
+                    for (y, g) in step.iter().zip(gains.iter()) {
+                        (0..LANES).for_each(|l| u[l] += g * y[l]);
+                    }
+                    for l in 0..LANES {
+                        let magnitude = u[l].abs();
+                        if magnitude > peaks[l] {
+                            peaks[l] = magnitude;
+                        }
+                    }
+                }
+            }
+        }
         first += len;
     }
     Ok(())
@@ -436,14 +435,14 @@ mod tests {
             })
             .collect();
         let mut got = vec![vec![vec![0.0; steps]; 2]; 3];
-        run(&programs, &samples, steps, 0.01, &mut |first, outputs| {
+        let mut consume = |first: usize, outputs: &[Lanes]| {
             for (k, lanes) in outputs.iter().enumerate() {
                 for (lane, history) in got.iter_mut().enumerate() {
                     history[k % 2][first + k / 2] = lanes[lane];
                 }
             }
-        })
-        .unwrap();
+        };
+        run(&programs, &samples, steps, 0.01, &mut Sink::Blocks(&mut consume)).unwrap();
         for (k, history) in got.iter().enumerate() {
             let (ta, tb) = (&samples[k].theta[0], &samples[k].theta[1]);
             let (mut ya, mut yb) = (vec![0.0; steps], vec![0.0; steps]);
@@ -470,7 +469,7 @@ mod tests {
             BatchSample { theta: vec![vec![0.02, 1.9, -0.95]], forces: &forces },
             BatchSample { theta: vec![vec![0.02, 2.1, -0.9]], forces: &forces },
         ];
-        let err = run(&programs, &samples, 5000, 0.01, &mut |_, _| {}).unwrap_err();
+        let err = run(&programs, &samples, 5000, 0.01, &mut Sink::Blocks(&mut |_, _| {})).unwrap_err();
         match err {
             BatchError::Diverged(d) => assert_eq!((d.lane, d.mode), (1, 0)),
             other => panic!("{other:?}"),

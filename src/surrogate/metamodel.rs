@@ -2,7 +2,7 @@
 //! versioned.
 
 use super::Parametrization;
-use super::batch::{self, BatchError, BatchSample, ForceSource, LANES, Lanes, ModeProgram};
+use super::batch::{self, BatchError, BatchSample, ForceSource, LANES, Lanes, ModeProgram, Sink};
 use super::narx::NarxTerm;
 use super::pce::SparsePce;
 use super::{CalibrationOptions, ModeDiagnostics};
@@ -160,13 +160,14 @@ impl Metamodel {
         let mut out = vec![vec![0.0; steps]; self.models.len()];
         let samples = [BatchSample { theta, forces }];
         let modes = self.models.len();
-        batch::run(&self.programs(), &samples, steps, problem.storm.time_step, &mut |first, outputs| {
+        let mut consume = |first: usize, outputs: &[Lanes]| {
             for (k, lanes) in outputs.iter().enumerate() {
                 let m = k % modes;
                 out[m][first + k / modes] = levels[m] + lanes[0] * self.models[m].output_scale;
             }
-        })
-        .map_err(|e| batch_error(e, &[None]))?;
+        };
+        batch::run(&self.programs(), &samples, steps, problem.storm.time_step, &mut Sink::Blocks(&mut consume))
+            .map_err(|e| batch_error(e, &[None]))?;
         Ok(out)
     }
 
@@ -185,32 +186,15 @@ impl Metamodel {
             levels.push(level);
             batch.push(BatchSample { theta, forces });
         }
-        // The response is formed exactly as from the modal displacements, Σ_m w_m (level_m + scale_m ŷ_m),
-        // so that it rounds as the histories do.
-        let mut levels_by_mode = vec![[0.0; LANES]; self.models.len()];
-        for (lane, level) in levels.iter().enumerate() {
-            for (m, v) in level.iter().enumerate() {
-                levels_by_mode[m][lane] = *v;
-            }
+        let gains: Vec<f64> = self.models.iter().zip(weights).map(|(model, w)| w * model.output_scale).collect();
+        let mut offsets = [0.0; LANES];
+        for (offset, level) in offsets.iter_mut().zip(&levels) {
+            *offset = level.iter().zip(weights).map(|(l, w)| w * l).sum();
         }
         let mut peaks = [0.0f64; LANES];
-        let modes = self.models.len();
-        let terms: Vec<(f64, f64, Lanes)> =
-            (0..modes).map(|m| (weights[m], self.models[m].output_scale, levels_by_mode[m])).collect();
-        batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, &mut |_, outputs| {
-            for step in outputs.chunks_exact(modes) {
-                let mut u = [0.0; LANES];
-                for (y, (w, scale, level)) in step.iter().zip(&terms) {
-                    for l in 0..LANES {
-                        u[l] += w * (level[l] + y[l] * scale);
-                    }
-                }
-                for l in 0..LANES {
-                    peaks[l] = peaks[l].max(u[l].abs());
-                }
-            }
-        })
-        .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))?;
+        let mut sink = Sink::Peaks { gains: &gains, offsets, peaks: &mut peaks };
+        batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, &mut sink)
+            .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))?;
         Ok(peaks[..samples.len()].to_vec())
     }
 }

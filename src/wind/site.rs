@@ -28,8 +28,9 @@ pub struct WindSite {
     pub cutoff_rad_s: f64,
     /// Frequencies per component, N (81 920 phases for 40 floors means 2048).
     pub frequencies: usize,
-    /// Time step on which the full floor field is generated before cubic interpolation to the
-    /// storm's time step (s); it must resolve the cut-off: ≤ π/ω_up.
+    /// Time step on which the wind (the full floor field, or the modal forces directly) is
+    /// generated before cubic interpolation to the storm's time step (s); it must resolve the
+    /// cut-off: ≤ π/ω_up.
     pub field_generation_step_s: f64,
 }
 

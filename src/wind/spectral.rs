@@ -77,9 +77,25 @@ impl CoarseSeries {
     }
 }
 
+/// Instant i of a grid whose step is `ratio` generation steps: its first coarse neighbour p (coarse
+/// point p is at t = (p − 1)·dt_g) and the four weights of Keys' cubic convolution (a = −½).
+#[inline(always)]
+pub fn cubic_point(i: usize, ratio: f64) -> (usize, [f64; 4]) {
+    let x = i as f64 * ratio;
+    // x ≥ 0, so truncation is the floor.
+    let p = x as usize;
+    let f = x - p as f64;
+    let weights = [
+        0.5 * f * (-1.0 + f * (2.0 - f)),
+        0.5 * (2.0 + f * f * (-5.0 + 3.0 * f)),
+        0.5 * f * (1.0 + f * (4.0 - 3.0 * f)),
+        0.5 * f * f * (f - 1.0),
+    ];
+    (p, weights)
+}
+
 /// Where instants first, first + 1, … of a grid of step `time_step` fall on a generation grid of
-/// step dt_g whose first point is at −dt_g: each one's first coarse neighbour and the four weights of
-/// Keys' cubic convolution (a = −½). One plan serves every component and every sample on the same
+/// step dt_g whose first point is at −dt_g: [`cubic_point`] of each. One plan serves every component and every sample on the same
 /// grids; a weight depends only on its instant, so values do not depend on where a block starts.
 #[derive(Debug, Clone)]
 pub struct InterpolationPlan {
@@ -90,27 +106,8 @@ pub struct InterpolationPlan {
 impl InterpolationPlan {
     pub fn new(dt_g: f64, time_step: f64, first: usize, len: usize) -> Self {
         let ratio = time_step / dt_g;
-        let (start, weights) = (first..first + len)
-            .map(|i| {
-                let x = i as f64 * ratio;
-                // x ≥ 0, so truncation is the floor; coarse point p is at t = (p − 1)·dt_g.
-                let p = x as usize;
-                let f = x - p as f64;
-                let weights = [
-                    0.5 * f * (-1.0 + f * (2.0 - f)),
-                    0.5 * (2.0 + f * f * (-5.0 + 3.0 * f)),
-                    0.5 * f * (1.0 + f * (4.0 - 3.0 * f)),
-                    0.5 * f * f * (f - 1.0),
-                ];
-                (p, weights)
-            })
-            .unzip();
+        let (start, weights) = (first..first + len).map(|i| cubic_point(i, ratio)).unzip();
         InterpolationPlan { start, weights }
-    }
-
-    /// Each instant's first coarse neighbour and its four weights.
-    pub fn points(&self) -> impl Iterator<Item = (usize, &[f64; 4])> {
-        self.start.iter().copied().zip(&self.weights)
     }
 
     /// offset + the interpolated `coarse` at the plan's instants, into `out`.
