@@ -218,29 +218,25 @@ fn dispatch(
     recurse(state, samples, steps, time_step, sink)
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn recurse_avx512(
-    state: &State,
-    samples: &[BatchSample],
-    steps: usize,
-    time_step: f64,
-    sink: &mut Sink,
-) -> std::result::Result<(), Divergence> {
-    recurse(state, samples, steps, time_step, sink)
+/// `recurse` compiled for an instruction set the processor is checked for at run time.
+macro_rules! recurse_with {
+    ($name:ident, $features:literal) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $features)]
+        unsafe fn $name(
+            state: &State,
+            samples: &[BatchSample],
+            steps: usize,
+            time_step: f64,
+            sink: &mut Sink,
+        ) -> std::result::Result<(), Divergence> {
+            recurse(state, samples, steps, time_step, sink)
+        }
+    };
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn recurse_avx2(
-    state: &State,
-    samples: &[BatchSample],
-    steps: usize,
-    time_step: f64,
-    sink: &mut Sink,
-) -> std::result::Result<(), Divergence> {
-    recurse(state, samples, steps, time_step, sink)
-}
+recurse_with!(recurse_avx512, "avx512f");
+recurse_with!(recurse_avx2, "avx2");
 
 #[inline(always)]
 fn power(x: &Lanes, p: u32) -> Lanes {
