@@ -3,13 +3,13 @@
 //! [`LANES`] samples advance through the recursion together: every arithmetic operation is applied
 //! to all lanes of a `[f64; LANES]`, which the compiler turns into SIMD instructions (AVX2 or
 //! AVX-512 where the processor has them, chosen at run time). The models' terms are the same for
-//! every sample, only the coefficients differ, so the lanes never diverge in control flow. Forces
-//! are filled in blocks of [`BLOCK`] steps (interpolated from the wind's generation grid where they
-//! come from it), so that the working set stays in the first-level cache whatever the storm's length.
+//! every sample, only the coefficients differ, so the lanes never diverge in control flow. Each
+//! step interpolates the modes' forces for all lanes at once from lane-major copies of the wind's
+//! generation grid, then sums each mode's input terms (off the recursion's critical path) and its
+//! output terms; outputs are kept for blocks of [`BLOCK`] steps, which a [`Sink`] reduces.
 //!
-//! The arithmetic of each lane is the scalar recursion's, operation for operation and in the same
-//! order (no fused multiply-adds), so the result does not depend on the instruction set or on which
-//! samples share a batch.
+//! No fused multiply-adds are used and no operation mixes lanes, so a lane's result does not depend
+//! on the instruction set or on which samples share its batch.
 
 use super::narx::{DIVERGENCE_BOUND, NarxTerm, diverged, rest_output};
 use crate::error::{Error, Result};

@@ -86,9 +86,16 @@ impl WindLoads {
         }
     }
 
-    /// Mean floor forces η_j v̄_j² (N).
-    pub fn mean_forces(&self, spectrum: &FieldSpectrum) -> Vec<f64> {
-        self.exposure.iter().zip(&spectrum.mean_speeds).map(|(e, v)| e * v * v).collect()
+    /// Mean floor forces η_j v̄_j² (N) at a station speed, v̄_j from Eq. (13) as in the spectrum.
+    pub fn mean_forces(&self, wind_speed: f64) -> Vec<f64> {
+        self.exposure
+            .iter()
+            .zip(&self.heights)
+            .map(|(e, &z)| {
+                let v = self.site.mean_speed(z, wind_speed);
+                e * v * v
+            })
+            .collect()
     }
 
     /// The full field: the fluctuating speed at every floor, then the quasi-steady forces.
@@ -96,7 +103,7 @@ impl WindLoads {
         Self::check_speed(wind_speed)?;
         let spectrum = self.spectrum(wind_speed);
         let speeds = simulate(&spectrum, &self.grid(), self.site.field_generation_step_s, storm, rng)?;
-        let mean = self.mean_forces(&spectrum);
+        let mean = self.mean_forces(wind_speed);
         let series = speeds
             .iter()
             .enumerate()
@@ -120,7 +127,7 @@ impl WindLoads {
         Self::check_speed(wind_speed)?;
         let spectrum = self.spectrum(wind_speed);
         let speeds = simulate_coarse(&spectrum, &self.grid(), self.site.field_generation_step_s, duration, rng)?;
-        let floor_means = self.mean_forces(&spectrum);
+        let floor_means = self.mean_forces(wind_speed);
         let modes = shapes.ncols();
         let mut mean = vec![0.0; modes];
         let mut series = vec![vec![0.0; speeds.series[0].len()]; modes];

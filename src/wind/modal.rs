@@ -151,9 +151,8 @@ impl ModalWind {
     /// One storm of `duration` seconds at station speed `wind_speed`, on the generation grid.
     pub fn simulate(&self, wind_speed: f64, duration: f64, rng: &mut Rng) -> Result<CoarseModalForces> {
         WindLoads::check_speed(wind_speed)?;
-        let field = self.loads.spectrum(wind_speed);
         let shapes = self.shapes.as_ref();
-        let mean_forces = self.loads.mean_forces(&field);
+        let mean_forces = self.loads.mean_forces(wind_speed);
         let mean: Vec<f64> =
             (0..shapes.ncols()).map(|m| (0..shapes.nrows()).map(|j| shapes[(j, m)] * mean_forces[j]).sum()).collect();
         let grid = self.loads.grid();
@@ -161,6 +160,7 @@ impl ModalWind {
         let fluctuations = if (TABLE_SPEEDS.0..=TABLE_SPEEDS.1).contains(&wind_speed) {
             simulate_coarse(&ScaledSpectrum { table: &self.table, speed: wind_speed }, &grid, step, duration, rng)?
         } else {
+            let field = self.loads.spectrum(wind_speed);
             simulate_coarse(&Self::projected(&self.loads, shapes, &field), &grid, step, duration, rng)?
         };
         Ok(CoarseModalForces { mean, fluctuations })
