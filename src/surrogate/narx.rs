@@ -221,6 +221,13 @@ pub struct Exogenous<'a> {
 }
 
 impl Exogenous<'_> {
+    /// Value of a term that does not read the own output (input, constant or another mode's output).
+    #[inline]
+    fn external_value(&self, term: &NarxTerm, t: usize) -> f64 {
+        let y = term.output_mode.map_or(0.0, |j| lagged(self.outputs[j], t, term.output_lag, self.output_rests[j]));
+        term.value(y, lagged(self.q, t, term.input_lag, self.q_rest))
+    }
+
     #[inline]
     fn value(&self, term: &NarxTerm, own: &[f64], own_rest: f64, t: usize) -> f64 {
         let y = match term.output_mode {
@@ -282,12 +289,25 @@ pub fn diverged(value: f64) -> bool {
 /// Free run (Eq. 10) of one mode: ŷ(t) = Σ θ_i g_i(ẑ(t)) from the rest state, its own outputs fed
 /// back, the exogenous series read as given. Writes `out[0..q.len()]`; fails when the run leaves
 /// [−bound, bound] or stops being finite.
+///
+/// The terms that do not read the own output do not depend on the run, so their sum is formed
+/// first, one pass per term over `out`; the step-by-step recursion then only evaluates the
+/// feedback terms (two to four of a dictionary's ten), which makes structure selection, where
+/// thousands of free runs score the candidates, several times faster.
 pub fn free_run(terms: &[NarxTerm], theta: &[f64], ex: &Exogenous, rest: f64, out: &mut [f64]) -> Result<()> {
     let n = ex.q.len();
+    out[..n].fill(0.0);
+    let (feedback, exogenous): (Vec<(&NarxTerm, f64)>, Vec<(&NarxTerm, f64)>) =
+        terms.iter().zip(theta.iter().copied()).partition(|(term, _)| term.reads_own_output());
+    for (term, c) in exogenous {
+        for (t, o) in out.iter_mut().enumerate().take(n).skip(1) {
+            *o += c * ex.external_value(term, t);
+        }
+    }
     out[0] = rest;
     for t in 1..n {
-        let mut value = 0.0;
-        for (term, c) in terms.iter().zip(theta) {
+        let mut value = out[t];
+        for &(term, c) in &feedback {
             value += c * ex.value(term, out, rest, t);
         }
         if diverged(value) {
