@@ -5,15 +5,18 @@
 //! AVX-512 where the processor has them, chosen at run time). The models' terms are the same for
 //! every sample, only the coefficients differ, so the lanes never diverge in control flow. Each
 //! step interpolates the modes' forces for all lanes at once from lane-major copies of the wind's
-//! generation grid, then sums each mode's input terms (off the recursion's critical path) and its
-//! output terms; outputs are kept for blocks of [`BLOCK`] steps, which a [`Sink`] reduces.
+//! generation grid, then sums each mode's terms. Structures made only of the constant and lagged
+//! inputs and outputs to the first power (what the paper's selection finds) run as dense
+//! coefficient arrays with the modes and lags fixed at compile time, which keeps the recursion's
+//! state in registers; any other structure runs from term lists. Outputs are kept for blocks of
+//! [`BLOCK`] steps, which a [`Sink`] reduces.
 //!
 //! No fused multiply-adds are used and no operation mixes lanes, so a lane's result does not depend
 //! on the instruction set or on which samples share its batch.
 
 use super::narx::{DIVERGENCE_BOUND, NarxTerm, diverged, rest_output};
 use crate::error::{Error, Result};
-use crate::wind::{CoarseModalForces, CoarseSeries, ModalForces, cubic_point};
+use crate::wind::{CoarseModalForces, CoarseSeries, CubicSchedule, ModalForces};
 
 /// Samples per batch: one AVX-512 register of f64, two AVX2 ones.
 pub const LANES: usize = 8;
@@ -156,7 +159,8 @@ pub fn run(
     let history =
         programs.iter().flat_map(|p| p.terms.iter()).map(|t| t.output_lag.max(t.input_lag)).max().unwrap_or(0);
     let inverse_scales = programs.iter().map(|p| 1.0 / p.input_scale).collect();
-    let state = State { rests, exogenous, linear, feedback, history, inverse_scales };
+    let dense = DenseLinear::new(programs, history, coefficient);
+    let state = State { rests, exogenous, linear, feedback, history, inverse_scales, dense };
     dispatch(&state, samples, steps, time_step, sink).map_err(BatchError::Diverged)
 }
 
@@ -195,6 +199,129 @@ struct State {
     /// Longest lag: the steps each block carries over from the one before.
     history: usize,
     inverse_scales: Vec<f64>,
+    /// The same models as dense arrays, when they fit the fast recursion.
+    dense: Option<DenseLinear>,
+}
+
+/// Most modes, and longest lag, the fast recursion is compiled for.
+const DENSE_MODES: usize = 3;
+const DENSE_LAGS: usize = 2;
+
+/// The models of a batch as dense coefficient arrays, zero where a term is absent, when every term
+/// is the constant, Q_m(t − k) or y_s(t − k) with k ≤ [`DENSE_LAGS`] — which is what the paper's
+/// structures select. With the modes and lags then fixed at compile time ([`linear_block`]) the last
+/// outputs stay in registers instead of making a round trip through memory every step.
+struct DenseLinear {
+    /// Lag slots K = longest lag + 1 (slot 0 is the present, read only by input terms).
+    slots: usize,
+    constant: Vec<Lanes>,
+    /// input[k·M + m]: coefficient of Q_m(t − k).
+    input: Vec<Lanes>,
+    /// output[(k·M + m)·M + s]: coefficient of y_s(t − k) in mode m (slot 0 stays zero).
+    output: Vec<Lanes>,
+}
+
+impl DenseLinear {
+    fn new(programs: &[ModeProgram], history: usize, coefficient: impl Fn(usize, usize) -> Lanes) -> Option<Self> {
+        let modes = programs.len();
+        if !(1..=DENSE_MODES).contains(&modes) || !(1..=DENSE_LAGS).contains(&history) {
+            return None;
+        }
+        let slots = history + 1;
+        let mut dense = DenseLinear {
+            slots,
+            constant: vec![[0.0; LANES]; modes],
+            input: vec![[0.0; LANES]; slots * modes],
+            output: vec![[0.0; LANES]; slots * modes * modes],
+        };
+        for (m, program) in programs.iter().enumerate() {
+            for (k, t) in program.terms.iter().enumerate() {
+                let target = match (t.output_power, t.input_power) {
+                    (0, 0) => &mut dense.constant[m],
+                    (0, 1) => &mut dense.input[t.input_lag * modes + m],
+                    (1, 0) if t.output_lag >= 1 => {
+                        &mut dense.output[(t.output_lag * modes + m) * modes + t.output_mode.unwrap_or(m)]
+                    }
+                    _ => return None,
+                };
+                let c = coefficient(m, k);
+                (0..LANES).for_each(|l| target[l] += c[l]);
+            }
+        }
+        Some(dense)
+    }
+}
+
+/// Steps `from..len` of a block by the dense linear models, M modes and K lag slots; `inputs` and
+/// `outputs` laid out as in [`recurse`]. The sum of each step takes the constant, the inputs, the
+/// older outputs and the newest outputs last, so that only the last few additions wait on the
+/// previous step.
+#[inline(always)]
+fn linear_block<const M: usize, const K: usize>(
+    dense: &DenseLinear,
+    inputs: &[Lanes],
+    outputs: &mut [Lanes],
+    h: usize,
+    from: usize,
+    len: usize,
+) {
+    // Plain index loops and zero-initialised arrays throughout: `std::array::from_fn` is not inlined
+    // into the instruction-set wrappers, and its calls kept the state out of registers.
+    let mut constant = [[0.0; LANES]; M];
+    let mut input = [[[0.0; LANES]; M]; K];
+    let mut output = [[[[0.0; LANES]; M]; M]; K];
+    // recent[k][s] = y_s(t − k) for the step t about to be computed (slot 0 unused).
+    let mut recent = [[[0.0; LANES]; M]; K];
+    for m in 0..M {
+        constant[m] = dense.constant[m];
+        for k in 0..K {
+            input[k][m] = dense.input[k * M + m];
+            for s in 0..M {
+                output[k][m][s] = dense.output[(k * M + m) * M + s];
+            }
+            if k > 0 {
+                recent[k][m] = outputs[(h + from - k) * M + m];
+            }
+        }
+    }
+    for i in from..len {
+        let here = h + i;
+        let mut next = constant;
+        for m in 0..M {
+            for k in 0..K {
+                let q = &inputs[(here - k) * M + m];
+                for l in 0..LANES {
+                    next[m][l] += input[k][m][l] * q[l];
+                }
+            }
+            for k in (1..K).rev() {
+                for s in 0..M {
+                    for l in 0..LANES {
+                        next[m][l] += output[k][m][s][l] * recent[k][s][l];
+                    }
+                }
+            }
+        }
+        for k in (2..K).rev() {
+            recent[k] = recent[k - 1];
+        }
+        recent[1] = next;
+        outputs[here * M..(here + 1) * M].copy_from_slice(&next);
+    }
+}
+
+/// [`linear_block`] for the batch's modes and lags.
+#[inline(always)]
+fn dense_block(dense: &DenseLinear, inputs: &[Lanes], outputs: &mut [Lanes], h: usize, from: usize, len: usize) {
+    match (dense.constant.len(), dense.slots) {
+        (1, 2) => linear_block::<1, 2>(dense, inputs, outputs, h, from, len),
+        (2, 2) => linear_block::<2, 2>(dense, inputs, outputs, h, from, len),
+        (3, 2) => linear_block::<3, 2>(dense, inputs, outputs, h, from, len),
+        (1, 3) => linear_block::<1, 3>(dense, inputs, outputs, h, from, len),
+        (2, 3) => linear_block::<2, 3>(dense, inputs, outputs, h, from, len),
+        (3, 3) => linear_block::<3, 3>(dense, inputs, outputs, h, from, len),
+        other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
+    }
 }
 
 fn dispatch(
@@ -250,16 +377,16 @@ fn power(x: &Lanes, p: u32) -> Lanes {
 }
 
 /// The scaled input deviations of every lane, lane-major so that one interpolation serves all lanes:
-/// `(ratio, inputs)` with inputs[m][q][lane] the value at coarse point q (at t = (q − 1)·dt_g) and
-/// `ratio` = time_step / dt_g. Samples from one generation grid are taken as they are; any others
-/// are filled on the storm's grid and padded, which the same interpolation then reads exactly
-/// (ratio 1, weights 0, 1, 0, 0).
+/// `(schedule, inputs)` with inputs[m][q][lane] the value at coarse point q (at t = (q − 1)·dt_g)
+/// and the schedule from the storm's grid onto it. Samples from one generation grid are taken as
+/// they are; any others are filled on the storm's grid and padded, which the same interpolation
+/// then reads exactly (one step per generation step, weights 0, 1, 0, 0).
 fn lane_inputs(
     samples: &[BatchSample],
     inverse_scales: &[f64],
     steps: usize,
     time_step: f64,
-) -> (f64, Vec<Vec<Lanes>>) {
+) -> (CubicSchedule, Vec<Vec<Lanes>>) {
     let transpose = |series: &[Vec<f64>], scale: f64| -> Vec<Lanes> {
         (0..series[0].len())
             .map(|q| {
@@ -279,7 +406,7 @@ fn lane_inputs(
         let inputs = (0..inverse_scales.len())
             .map(|m| transpose(&all.iter().map(|c| c.series[m].clone()).collect::<Vec<_>>(), inverse_scales[m]))
             .collect();
-        return (time_step / step, inputs);
+        return (CubicSchedule::new(step, time_step), inputs);
     }
     let inputs = (0..inverse_scales.len())
         .map(|m| {
@@ -296,13 +423,13 @@ fn lane_inputs(
             if padded.is_empty() { vec![[0.0; LANES]; steps + 3] } else { transpose(&padded, inverse_scales[m]) }
         })
         .collect();
-    (1.0, inputs)
+    (CubicSchedule::new(time_step, time_step), inputs)
 }
 
-/// The recursion itself, every step: the modes' inputs interpolated from the lane-major coarse
-/// inputs, then each mode's terms. `inputs` and `outputs` hold `history` carried-over steps, then
-/// the block, the modes interleaved: outputs[(h + i)·modes + m]. Before t = 0 the outputs are at
-/// rest and the input deviations zero.
+/// The recursion itself, a block of steps at a time: the modes' inputs interpolated from the
+/// lane-major coarse inputs, then the outputs step by step (dense or by term lists). `inputs` and
+/// `outputs` hold `history` carried-over steps, then the block, the modes interleaved:
+/// outputs[(h + i)·modes + m]. Before t = 0 the outputs are at rest and the input deviations zero.
 #[inline(always)]
 fn recurse(
     state: &State,
@@ -313,7 +440,7 @@ fn recurse(
 ) -> std::result::Result<(), Divergence> {
     let modes = state.rests.len();
     let h = state.history;
-    let (ratio, coarse) = lane_inputs(samples, &state.inverse_scales, steps, time_step);
+    let (schedule, coarse) = lane_inputs(samples, &state.inverse_scales, steps, time_step);
     let mut inputs: Vec<Lanes> = vec![[0.0; LANES]; (h + BLOCK) * modes];
     let mut outputs: Vec<Lanes> = (0..(h + BLOCK) * modes).map(|k| state.rests[k % modes]).collect();
     let mut first = 0;
@@ -321,45 +448,26 @@ fn recurse(
         let len = BLOCK.min(steps - first);
         outputs.copy_within(BLOCK * modes.., 0);
         inputs.copy_within(BLOCK * modes.., 0);
-        for i in 0..len {
-            let t = first + i;
-            let here = (h + i) * modes;
-            let (p, w) = cubic_point(t, ratio);
-            for (m, lanes) in coarse.iter().enumerate() {
-                let y = &lanes[p..p + 4];
-                inputs[here + m] =
-                    std::array::from_fn(|l| w[0] * y[0][l] + w[1] * y[1][l] + w[2] * y[2][l] + w[3] * y[3][l]);
-            }
-            if t == 0 {
-                continue;
-            }
-            for m in 0..modes {
-                let mut value = [0.0; LANES];
-                for term in &state.exogenous[m] {
-                    let c = &term.coefficient;
-                    match term.input_power {
-                        0 => (0..LANES).for_each(|l| value[l] += c[l]),
-                        p => {
-                            let g = power(&inputs[here - term.input_lag * modes + m], p);
-                            (0..LANES).for_each(|l| value[l] += c[l] * g[l]);
-                        }
-                    }
-                }
-                for (back, c) in &state.linear[m] {
-                    let y = &outputs[here - back];
+        schedule.for_each(
+            first,
+            len,
+            #[inline(always)]
+            |i, p, w| {
+                for (m, lanes) in coarse.iter().enumerate() {
+                    let (y0, y1, y2, y3) = (&lanes[p], &lanes[p + 1], &lanes[p + 2], &lanes[p + 3]);
+                    let mut q = [0.0; LANES];
                     for l in 0..LANES {
-                        value[l] += c[l] * y[l];
+                        q[l] = w[0] * y0[l] + w[1] * y1[l] + w[2] * y2[l] + w[3] * y3[l];
                     }
+                    inputs[(h + i) * modes + m] = q;
                 }
-                for term in &state.feedback[m] {
-                    let y = power(&outputs[here - term.output_lag * modes + term.source], term.output_power);
-                    let q = power(&inputs[here - term.input_lag * modes + m], term.input_power);
-                    for l in 0..LANES {
-                        value[l] += term.coefficient[l] * (y[l] * q[l]);
-                    }
-                }
-                outputs[here + m] = value;
-            }
+            },
+        );
+        let from = usize::from(first == 0);
+        if let Some(dense) = &state.dense {
+            dense_block(dense, &inputs, &mut outputs, h, from, len);
+        } else {
+            general_block(state, &inputs, &mut outputs, from, len);
         }
         // Checked once a block, so that the lanes never branch apart inside the recursion.
         if let Some(divergence) = first_divergence(&outputs, modes, h, first, len) {
@@ -386,6 +494,45 @@ fn recurse(
         first += len;
     }
     Ok(())
+}
+
+/// Steps `from..len` of a block by the models as term lists, for structures the dense recursion
+/// does not cover: each mode's input terms first (off the recursion's critical path), then its
+/// output terms.
+#[inline(always)]
+fn general_block(state: &State, inputs: &[Lanes], outputs: &mut [Lanes], from: usize, len: usize) {
+    let modes = state.rests.len();
+    let h = state.history;
+    for i in from..len {
+        let here = (h + i) * modes;
+        for m in 0..modes {
+            let mut value = [0.0; LANES];
+            for term in &state.exogenous[m] {
+                let c = &term.coefficient;
+                match term.input_power {
+                    0 => (0..LANES).for_each(|l| value[l] += c[l]),
+                    p => {
+                        let g = power(&inputs[here - term.input_lag * modes + m], p);
+                        (0..LANES).for_each(|l| value[l] += c[l] * g[l]);
+                    }
+                }
+            }
+            for (back, c) in &state.linear[m] {
+                let y = &outputs[here - back];
+                for l in 0..LANES {
+                    value[l] += c[l] * y[l];
+                }
+            }
+            for term in &state.feedback[m] {
+                let y = power(&outputs[here - term.output_lag * modes + term.source], term.output_power);
+                let q = power(&inputs[here - term.input_lag * modes + m], term.input_power);
+                for l in 0..LANES {
+                    value[l] += term.coefficient[l] * (y[l] * q[l]);
+                }
+            }
+            outputs[here + m] = value;
+        }
+    }
 }
 
 /// The earliest (step, mode, lane) of a block whose output left the bound (a NaN counts as out).
@@ -453,6 +600,52 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The dense recursion and the term lists agree: the same linear models, once as they are and
+    /// once with a zero-coefficient cubic term that sends them through the term lists.
+    #[test]
+    fn dense_and_term_list_recursions_agree() {
+        let linear = [NarxTerm::CONSTANT, NarxTerm::input(0, 1), NarxTerm::input(1, 1), NarxTerm::output(1, 1, None)];
+        let linear_b = [NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(2, 1, Some(0))];
+        let cubic = NarxTerm::output(1, 3, None);
+        let (with_a, with_b) = ([&linear[..], &[cubic]].concat(), [&linear_b[..], &[cubic]].concat());
+        let steps = 1100;
+        let forces = ModalForces {
+            mean: vec![0.0, 0.0],
+            series: vec![(0..steps).map(|t| (t as f64 * 0.013).sin()).collect(), vec![0.5; steps]],
+        };
+        let run_with = |a: &[NarxTerm], b: &[NarxTerm], extra: usize| -> Vec<Vec<f64>> {
+            let programs = [ModeProgram { terms: a, input_scale: 2.0 }, ModeProgram { terms: b, input_scale: 1.0 }];
+            let samples: Vec<BatchSample> = (0..5)
+                .map(|k| {
+                    let k = k as f64;
+                    let mut ta = vec![0.01, 0.3, -0.1 * k, 0.9 - 0.05 * k];
+                    let mut tb = vec![0.2, 0.7, 0.02 * k];
+                    ta.extend(vec![0.0; extra]);
+                    tb.extend(vec![0.0; extra]);
+                    BatchSample { theta: vec![ta, tb], forces: &forces }
+                })
+                .collect();
+            let mut got = vec![vec![0.0; steps * 2]; 5];
+            let mut consume = |first: usize, outputs: &[Lanes]| {
+                for (k, lanes) in outputs.iter().enumerate() {
+                    for (lane, history) in got.iter_mut().enumerate() {
+                        history[first * 2 + k] = lanes[lane];
+                    }
+                }
+            };
+            run(&programs, &samples, steps, 0.01, &mut Sink::Blocks(&mut consume)).unwrap();
+            got
+        };
+        let dense = run_with(&linear, &linear_b, 0);
+        let lists = run_with(&with_a, &with_b, 1);
+        for (d, l) in dense.iter().zip(&lists) {
+            for (a, b) in d.iter().zip(l) {
+                assert!((a - b).abs() <= 1e-13 * a.abs().max(1.0), "{a} vs {b}");
+            }
+        }
+        assert!(dense[0].iter().any(|v| v.abs() > 0.1));
     }
 
     /// A lane whose model is unstable is reported with its mode and step; the others do not matter.

@@ -12,7 +12,5 @@ mod spectrum;
 pub use forces::{FloorForces, ModalForces, WindLoads};
 pub use modal::{CoarseModalForces, ModalWind};
 pub use site::{StormGrid, WindSite};
-pub use spectral::{
-    CoarseSeries, CrossSpectralDensity, InterpolationPlan, SpectralGrid, cubic_point, simulate, simulate_coarse,
-};
+pub use spectral::{CoarseSeries, CrossSpectralDensity, CubicSchedule, SpectralGrid, simulate, simulate_coarse};
 pub use spectrum::{FieldSpectrum, ProjectedSpectrum};

@@ -60,62 +60,90 @@ pub struct CoarseSeries {
 impl CoarseSeries {
     /// Component j at instants first, first + 1, … of a grid of step `time_step`, plus `offset`.
     pub fn interpolate_into(&self, j: usize, time_step: f64, first: usize, offset: f64, out: &mut [f64]) {
-        InterpolationPlan::new(self.step, time_step, first, out.len()).apply(&self.series[j], offset, out);
+        CubicSchedule::new(self.step, time_step).apply(&self.series[j], first, offset, out);
     }
 
     /// Every component on `storm`'s grid.
     pub fn on_grid(&self, storm: &StormGrid) -> Vec<Vec<f64>> {
-        let plan = InterpolationPlan::new(self.step, storm.time_step, 0, storm.steps());
+        let schedule = CubicSchedule::new(self.step, storm.time_step);
         self.series
             .iter()
             .map(|coarse| {
                 let mut out = vec![0.0; storm.steps()];
-                plan.apply(coarse, 0.0, &mut out);
+                schedule.apply(coarse, 0, 0.0, &mut out);
                 out
             })
             .collect()
     }
 }
 
-/// Instant i of a grid whose step is `ratio` generation steps: its first coarse neighbour p (coarse
-/// point p is at t = (p − 1)·dt_g) and the four weights of Keys' cubic convolution (a = −½).
+/// Keys' cubic convolution weights (a = −½) of the four coarse points around an instant a fraction
+/// f ∈ [0, 1) past the second of them.
 #[inline(always)]
-pub fn cubic_point(i: usize, ratio: f64) -> (usize, [f64; 4]) {
-    let x = i as f64 * ratio;
-    // x ≥ 0, so truncation is the floor.
-    let p = x as usize;
-    let f = x - p as f64;
-    let weights = [
+fn keys_weights(f: f64) -> [f64; 4] {
+    [
         0.5 * f * (-1.0 + f * (2.0 - f)),
         0.5 * (2.0 + f * f * (-5.0 + 3.0 * f)),
         0.5 * f * (1.0 + f * (4.0 - 3.0 * f)),
         0.5 * f * f * (f - 1.0),
-    ];
-    (p, weights)
+    ]
 }
 
-/// Where instants first, first + 1, … of a grid of step `time_step` fall on a generation grid of
-/// step dt_g whose first point is at −dt_g: [`cubic_point`] of each. One plan serves every component and every sample on the same
-/// grids; a weight depends only on its instant, so values do not depend on where a block starts.
+/// Where the instants of a grid of step `time_step` fall on a generation grid of step dt_g whose
+/// first point is at −dt_g: instant i's first coarse neighbour p (coarse point p is at
+/// t = (p − 1)·dt_g) and its four cubic-convolution weights. When dt_g is a whole number r of
+/// steps (0.1 s over 0.01 s) instant i = r·p + j lies the exact fraction j/r past point p + 1, so
+/// r sets of weights serve every instant and no step computes any; otherwise each instant's are
+/// computed from i·time_step/dt_g. A weight depends only on its instant, so values do not depend
+/// on where a block starts.
 #[derive(Debug, Clone)]
-pub struct InterpolationPlan {
-    start: Vec<usize>,
-    weights: Vec<[f64; 4]>,
+pub struct CubicSchedule {
+    ratio: f64,
+    periodic: Option<Vec<[f64; 4]>>,
 }
 
-impl InterpolationPlan {
-    pub fn new(dt_g: f64, time_step: f64, first: usize, len: usize) -> Self {
-        let ratio = time_step / dt_g;
-        let (start, weights) = (first..first + len).map(|i| cubic_point(i, ratio)).unzip();
-        InterpolationPlan { start, weights }
+impl CubicSchedule {
+    pub fn new(dt_g: f64, time_step: f64) -> Self {
+        let per_step = dt_g / time_step;
+        let r = per_step.round();
+        let whole = r >= 1.0 && r <= 1e6 && (per_step - r).abs() <= 1e-9 * per_step;
+        let periodic = whole.then(|| (0..r as usize).map(|j| keys_weights(j as f64 / r)).collect());
+        CubicSchedule { ratio: time_step / dt_g, periodic }
     }
 
-    /// offset + the interpolated `coarse` at the plan's instants, into `out`.
-    pub fn apply(&self, coarse: &[f64], offset: f64, out: &mut [f64]) {
-        for ((o, &p), w) in out.iter_mut().zip(&self.start).zip(&self.weights) {
-            let y = &coarse[p..p + 4];
-            *o = offset + (w[0] * y[0] + w[1] * y[1] + w[2] * y[2] + w[3] * y[3]);
+    /// `visit(i, p, weights)` for instants first + i, i = 0..len, in order.
+    #[inline(always)]
+    pub fn for_each(&self, first: usize, len: usize, mut visit: impl FnMut(usize, usize, &[f64; 4])) {
+        match &self.periodic {
+            Some(weights) => {
+                let r = weights.len();
+                let (mut p, mut j) = (first / r, first % r);
+                for i in 0..len {
+                    visit(i, p, &weights[j]);
+                    j += 1;
+                    if j == r {
+                        j = 0;
+                        p += 1;
+                    }
+                }
+            }
+            None => {
+                for i in 0..len {
+                    let x = (first + i) as f64 * self.ratio;
+                    // x ≥ 0, so truncation is the floor.
+                    let p = x as usize;
+                    visit(i, p, &keys_weights(x - p as f64));
+                }
+            }
         }
+    }
+
+    /// offset + the interpolated `coarse` at instants first, first + 1, …, into `out`.
+    pub fn apply(&self, coarse: &[f64], first: usize, offset: f64, out: &mut [f64]) {
+        self.for_each(first, out.len(), |i, p, w| {
+            let y = &coarse[p..p + 4];
+            out[i] = offset + (w[0] * y[0] + w[1] * y[1] + w[2] * y[2] + w[3] * y[3]);
+        });
     }
 }
 
@@ -305,11 +333,14 @@ mod tests {
                 1.0 + 2.0 * t - 3.0 * t * t
             })
             .collect();
-        let mut fine = vec![0.0; 201];
-        InterpolationPlan::new(dt_g, 0.01, 0, 201).apply(&coarse, 0.0, &mut fine);
-        for (i, y) in fine.iter().enumerate() {
-            let t = i as f64 * 0.01;
-            assert!((y - (1.0 + 2.0 * t - 3.0 * t * t)).abs() < 1e-12);
+        // A whole number of steps per generation step (periodic weights) and not (computed ones).
+        for time_step in [0.01, 0.03] {
+            let mut fine = vec![0.0; 67];
+            CubicSchedule::new(dt_g, time_step).apply(&coarse, 0, 0.0, &mut fine);
+            for (i, y) in fine.iter().enumerate() {
+                let t = i as f64 * time_step;
+                assert!((y - (1.0 + 2.0 * t - 3.0 * t * t)).abs() < 1e-12, "step {time_step}, instant {i}");
+            }
         }
     }
 
