@@ -257,6 +257,7 @@ impl DenseLinear {
 /// older outputs and the newest outputs last, so that only the last few additions wait on the
 /// previous step.
 #[inline(always)]
+#[allow(clippy::needless_range_loop)] // index loops over the fixed sizes: see the first comment
 fn linear_block<const M: usize, const K: usize>(
     dense: &DenseLinear,
     inputs: &[Lanes],

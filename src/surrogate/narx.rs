@@ -297,9 +297,9 @@ pub fn diverged(value: f64) -> bool {
 pub fn free_run(terms: &[NarxTerm], theta: &[f64], ex: &Exogenous, rest: f64, out: &mut [f64]) -> Result<()> {
     let n = ex.q.len();
     out[..n].fill(0.0);
-    let (feedback, exogenous): (Vec<(&NarxTerm, f64)>, Vec<(&NarxTerm, f64)>) =
-        terms.iter().zip(theta.iter().copied()).partition(|(term, _)| term.reads_own_output());
-    for (term, c) in exogenous {
+    let weighted = || terms.iter().zip(theta.iter().copied());
+    let feedback: Vec<(&NarxTerm, f64)> = weighted().filter(|(term, _)| term.reads_own_output()).collect();
+    for (term, c) in weighted().filter(|(term, _)| !term.reads_own_output()) {
         for (t, o) in out.iter_mut().enumerate().take(n).skip(1) {
             *o += c * ex.external_value(term, t);
         }

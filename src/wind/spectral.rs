@@ -106,7 +106,7 @@ impl CubicSchedule {
     pub fn new(dt_g: f64, time_step: f64) -> Self {
         let per_step = dt_g / time_step;
         let r = per_step.round();
-        let whole = r >= 1.0 && r <= 1e6 && (per_step - r).abs() <= 1e-9 * per_step;
+        let whole = (1.0..=1e6).contains(&r) && (per_step - r).abs() <= 1e-9 * per_step;
         let periodic = whole.then(|| (0..r as usize).map(|j| keys_weights(j as f64 / r)).collect());
         CubicSchedule { ratio: time_step / dt_g, periodic }
     }
