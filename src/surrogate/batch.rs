@@ -483,11 +483,9 @@ fn recurse(
                     for (y, g) in step.iter().zip(gains.iter()) {
                         (0..LANES).for_each(|l| u[l] += g * y[l]);
                     }
+                    // Branch-free, so it vectorises; the block passed the divergence check, no NaN.
                     for l in 0..LANES {
-                        let magnitude = u[l].abs();
-                        if magnitude > peaks[l] {
-                            peaks[l] = magnitude;
-                        }
+                        peaks[l] = peaks[l].max(u[l].abs());
                     }
                 }
             }

@@ -12,6 +12,7 @@ use super::spectral::{CoarseSeries, CrossSpectralDensity, SpectralGrid, simulate
 use super::spectrum::ProjectedSpectrum;
 use super::{ModalForces, StormGrid, WindLoads};
 use crate::error::Result;
+use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
 use faer::{Mat, MatRef};
 
@@ -22,14 +23,17 @@ const POINTS_PER_DECADE: f64 = 160.0;
 /// Station speeds (m/s) the table serves; outside them the spectrum is projected exactly.
 const TABLE_SPEEDS: (f64, f64) = (1.0, 150.0);
 
-/// G(u) = S_Q(u; 1 m/s) on a logarithmic grid of reduced frequency u = ω/v̄ (rad/m).
+/// The lower Cholesky factor L(u) of G(u) = S_Q(u; 1 m/s) on a logarithmic grid of reduced
+/// frequency u = ω/v̄ (rad/m). Tabulating the factor rather than G spares every sample a
+/// factorisation per frequency: the factor of v̄³G is v̄^{3/2}L. L is as smooth in ln u as G (G is
+/// positive definite; where the coherence tends to one its last pivots go as √u, smooth in ln u).
 #[derive(Debug, Clone)]
 struct ModalSpectrumTable {
     dim: usize,
     log_first: f64,
     log_step: f64,
-    /// G at point k, row-major dim×dim: values[k·dim² + a·dim + b].
-    values: Vec<f64>,
+    /// L at point k, row-major dim×dim, lower triangle: factors[k·dim² + a·dim + b].
+    factors: Vec<f64>,
 }
 
 impl ModalSpectrumTable {
@@ -41,17 +45,19 @@ impl ModalSpectrumTable {
         let log_step = std::f64::consts::LN_10 / POINTS_PER_DECADE;
         let log_first = lowest.ln() - 2.0 * log_step;
         let points = ((highest.ln() - log_first) / log_step).ceil() as usize + 3;
-        let mut values = vec![0.0; points * dim * dim];
-        for (k, chunk) in values.chunks_exact_mut(dim * dim).enumerate() {
+        let mut factors = vec![0.0; points * dim * dim];
+        for (k, chunk) in factors.chunks_exact_mut(dim * dim).enumerate() {
             let u = (log_first + k as f64 * log_step).exp();
             unit.sweep(u, 0.0, 1, &mut |_, s| chunk.copy_from_slice(s));
+            cholesky_through_column(chunk, dim, dim - 1);
         }
-        ModalSpectrumTable { dim, log_first, log_step, values }
+        ModalSpectrumTable { dim, log_first, log_step, factors }
     }
 
-    /// G(u) into `out` (lower triangle), by four-point Lagrange interpolation in ln u.
-    fn evaluate(&self, u: f64, out: &mut [f64]) {
-        let points = self.values.len() / (self.dim * self.dim);
+    /// The first table point and the four Lagrange weights (in ln u) of reduced frequency u.
+    #[inline]
+    fn stencil(&self, u: f64) -> (usize, [f64; 4]) {
+        let points = self.factors.len() / (self.dim * self.dim);
         let x = (u.ln() - self.log_first) / self.log_step;
         let i = (x.floor() as usize).clamp(1, points - 3);
         let t = x - i as f64;
@@ -61,17 +67,19 @@ impl ModalSpectrumTable {
             -(t + 1.0) * t * (t - 2.0) / 2.0,
             (t + 1.0) * t * (t - 1.0) / 6.0,
         ];
+        (i - 1, weights)
+    }
+
+    /// Entry e (a·dim + b) of L(u), from `stencil(u)`.
+    #[inline]
+    fn entry(&self, (first, w): (usize, [f64; 4]), e: usize) -> f64 {
         let n2 = self.dim * self.dim;
-        for a in 0..self.dim {
-            for b in 0..=a {
-                let e = a * self.dim + b;
-                out[e] = (0..4).map(|r| weights[r] * self.values[(i - 1 + r) * n2 + e]).sum();
-            }
-        }
+        let at = |r: usize| self.factors[(first + r) * n2 + e];
+        w[0] * at(0) + w[1] * at(1) + w[2] * at(2) + w[3] * at(3)
     }
 }
 
-/// The table scaled to one station speed: S_Q(ω) = v̄³ G(ω/v̄).
+/// The table scaled to one station speed: S_Q(ω) = v̄³ G(ω/v̄), factor v̄^{3/2} L(ω/v̄).
 struct ScaledSpectrum<'a> {
     table: &'a ModalSpectrumTable,
     speed: f64,
@@ -82,13 +90,42 @@ impl CrossSpectralDensity for ScaledSpectrum<'_> {
         self.table.dim
     }
 
+    /// S = v̄³ L Lᵀ from the interpolated factor.
     fn sweep(&self, omega0: f64, domega: f64, count: usize, visit: &mut dyn FnMut(usize, &[f64])) {
+        let n = self.table.dim;
         let cube = self.speed.powi(3);
-        let mut s = vec![0.0; self.table.dim * self.table.dim];
+        let (mut factor, mut s) = (vec![0.0; n * n], vec![0.0; n * n]);
         for l in 0..count {
-            self.table.evaluate((omega0 + l as f64 * domega) / self.speed, &mut s);
-            s.iter_mut().for_each(|v| *v *= cube);
+            let stencil = self.table.stencil((omega0 + l as f64 * domega) / self.speed);
+            for e in 0..n * n {
+                factor[e] = if e % n <= e / n { self.table.entry(stencil, e) } else { 0.0 };
+            }
+            for a in 0..n {
+                for b in 0..=a {
+                    s[a * n + b] = cube * (0..=b).map(|k| factor[a * n + k] * factor[b * n + k]).sum::<f64>();
+                }
+            }
             visit(l, &s);
+        }
+    }
+
+    fn factor_column_sweep(
+        &self,
+        omega0: f64,
+        domega: f64,
+        count: usize,
+        m: usize,
+        visit: &mut dyn FnMut(usize, &[f64]),
+    ) {
+        let n = self.table.dim;
+        let scale = self.speed.powf(1.5);
+        let mut column = vec![0.0; n];
+        for l in 0..count {
+            let stencil = self.table.stencil((omega0 + l as f64 * domega) / self.speed);
+            for (j, c) in column.iter_mut().enumerate().skip(m) {
+                *c = scale * self.table.entry(stencil, j * n + m);
+            }
+            visit(l, &column);
         }
     }
 }
@@ -205,5 +242,34 @@ mod tests {
             });
         }
         assert!(worst < 1e-7, "largest relative error {worst:e}");
+    }
+
+    /// The tabulated factor's columns are the Cholesky factor of the spectrum the table gives.
+    #[test]
+    fn factor_columns_factor_the_tabulated_spectrum() {
+        let p = Problem::preset("frame40").unwrap();
+        let wind = ModalWind::new(&p.wind, p.modes.shapes.as_ref());
+        let scaled = ScaledSpectrum { table: &wind.table, speed: 33.0 };
+        let (omega0, domega) = (0.001, 0.0173);
+        let mut by_default = Vec::new();
+        let mut direct = Vec::new();
+        for m in 0..3 {
+            struct Plain<'a>(&'a ScaledSpectrum<'a>);
+            impl CrossSpectralDensity for Plain<'_> {
+                fn dim(&self) -> usize {
+                    3
+                }
+                fn sweep(&self, omega0: f64, domega: f64, count: usize, visit: &mut dyn FnMut(usize, &[f64])) {
+                    self.0.sweep(omega0, domega, count, visit)
+                }
+            }
+            Plain(&scaled).factor_column_sweep(omega0, domega, 300, m, &mut |_, c| by_default.push(c[m..].to_vec()));
+            scaled.factor_column_sweep(omega0, domega, 300, m, &mut |_, c| direct.push(c[m..].to_vec()));
+        }
+        for (a, b) in by_default.iter().zip(&direct) {
+            for (x, y) in a.iter().zip(b) {
+                assert!((x - y).abs() <= 1e-9 * b[0].abs(), "{a:?} vs {b:?}");
+            }
+        }
     }
 }
