@@ -97,8 +97,8 @@ impl CrossSpectralDensity for ScaledSpectrum<'_> {
         let (mut factor, mut s) = (vec![0.0; n * n], vec![0.0; n * n]);
         for l in 0..count {
             let stencil = self.table.stencil((omega0 + l as f64 * domega) / self.speed);
-            for e in 0..n * n {
-                factor[e] = if e % n <= e / n { self.table.entry(stencil, e) } else { 0.0 };
+            for (e, f) in factor.iter_mut().enumerate() {
+                *f = if e % n <= e / n { self.table.entry(stencil, e) } else { 0.0 };
             }
             for a in 0..n {
                 for b in 0..=a {
