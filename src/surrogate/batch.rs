@@ -214,6 +214,8 @@ const DENSE_LAGS: usize = 2;
 struct DenseLinear {
     /// Lag slots K = longest lag + 1 (slot 0 is the present, read only by input terms).
     slots: usize,
+    /// Input lag slots: 1 when every input term reads Q(t) only (the usual case), else K.
+    input_slots: usize,
     constant: Vec<Lanes>,
     /// input[k·M + m]: coefficient of Q_m(t − k).
     input: Vec<Lanes>,
@@ -228,8 +230,11 @@ impl DenseLinear {
             return None;
         }
         let slots = history + 1;
+        let input_lags = programs.iter().flat_map(|p| p.terms.iter()).filter(|t| t.input_power > 0);
+        let input_slots = if input_lags.clone().all(|t| t.input_lag == 0) { 1 } else { slots };
         let mut dense = DenseLinear {
             slots,
+            input_slots,
             constant: vec![[0.0; LANES]; modes],
             input: vec![[0.0; LANES]; slots * modes],
             output: vec![[0.0; LANES]; slots * modes * modes],
@@ -252,13 +257,14 @@ impl DenseLinear {
     }
 }
 
-/// Steps `from..len` of a block by the dense linear models, M modes and K lag slots; `inputs` and
+/// Steps `from..len` of a block by the dense linear models, M modes, K output lag slots and KI input
+/// lag slots (the first KI of the K stored); `inputs` and
 /// `outputs` laid out as in [`recurse`]. The sum of each step takes the constant, the inputs, the
 /// older outputs and the newest outputs last, so that only the last few additions wait on the
 /// previous step.
 #[inline(always)]
 #[allow(clippy::needless_range_loop)] // index loops over the fixed sizes: see the first comment
-fn linear_block<const M: usize, const K: usize>(
+fn linear_block<const M: usize, const K: usize, const KI: usize>(
     dense: &DenseLinear,
     inputs: &[Lanes],
     outputs: &mut [Lanes],
@@ -269,14 +275,16 @@ fn linear_block<const M: usize, const K: usize>(
     // Plain index loops and zero-initialised arrays throughout: `std::array::from_fn` is not inlined
     // into the instruction-set wrappers, and its calls kept the state out of registers.
     let mut constant = [[0.0; LANES]; M];
-    let mut input = [[[0.0; LANES]; M]; K];
+    let mut input = [[[0.0; LANES]; M]; KI];
     let mut output = [[[[0.0; LANES]; M]; M]; K];
     // recent[k][s] = y_s(t − k) for the step t about to be computed (slot 0 unused).
     let mut recent = [[[0.0; LANES]; M]; K];
     for m in 0..M {
         constant[m] = dense.constant[m];
         for k in 0..K {
-            input[k][m] = dense.input[k * M + m];
+            if k < KI {
+                input[k][m] = dense.input[k * M + m];
+            }
             for s in 0..M {
                 output[k][m][s] = dense.output[(k * M + m) * M + s];
             }
@@ -289,7 +297,7 @@ fn linear_block<const M: usize, const K: usize>(
         let here = h + i;
         let mut next = constant;
         for m in 0..M {
-            for k in 0..K {
+            for k in 0..KI {
                 let q = &inputs[(here - k) * M + m];
                 for l in 0..LANES {
                     next[m][l] += input[k][m][l] * q[l];
@@ -314,13 +322,20 @@ fn linear_block<const M: usize, const K: usize>(
 /// [`linear_block`] for the batch's modes and lags.
 #[inline(always)]
 fn dense_block(dense: &DenseLinear, inputs: &[Lanes], outputs: &mut [Lanes], h: usize, from: usize, len: usize) {
-    match (dense.constant.len(), dense.slots) {
-        (1, 2) => linear_block::<1, 2>(dense, inputs, outputs, h, from, len),
-        (2, 2) => linear_block::<2, 2>(dense, inputs, outputs, h, from, len),
-        (3, 2) => linear_block::<3, 2>(dense, inputs, outputs, h, from, len),
-        (1, 3) => linear_block::<1, 3>(dense, inputs, outputs, h, from, len),
-        (2, 3) => linear_block::<2, 3>(dense, inputs, outputs, h, from, len),
-        (3, 3) => linear_block::<3, 3>(dense, inputs, outputs, h, from, len),
+    // One instance per shape the paper's structures take: inputs at lag 0 or up to the output lags.
+    match (dense.constant.len(), dense.slots, dense.input_slots) {
+        (1, 2, 1) => linear_block::<1, 2, 1>(dense, inputs, outputs, h, from, len),
+        (2, 2, 1) => linear_block::<2, 2, 1>(dense, inputs, outputs, h, from, len),
+        (3, 2, 1) => linear_block::<3, 2, 1>(dense, inputs, outputs, h, from, len),
+        (1, 3, 1) => linear_block::<1, 3, 1>(dense, inputs, outputs, h, from, len),
+        (2, 3, 1) => linear_block::<2, 3, 1>(dense, inputs, outputs, h, from, len),
+        (3, 3, 1) => linear_block::<3, 3, 1>(dense, inputs, outputs, h, from, len),
+        (1, 2, 2) => linear_block::<1, 2, 2>(dense, inputs, outputs, h, from, len),
+        (2, 2, 2) => linear_block::<2, 2, 2>(dense, inputs, outputs, h, from, len),
+        (3, 2, 2) => linear_block::<3, 2, 2>(dense, inputs, outputs, h, from, len),
+        (1, 3, 3) => linear_block::<1, 3, 3>(dense, inputs, outputs, h, from, len),
+        (2, 3, 3) => linear_block::<2, 3, 3>(dense, inputs, outputs, h, from, len),
+        (3, 3, 3) => linear_block::<3, 3, 3>(dense, inputs, outputs, h, from, len),
         other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
     }
 }

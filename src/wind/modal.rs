@@ -59,7 +59,8 @@ impl ModalSpectrumTable {
     fn stencil(&self, u: f64) -> (usize, [f64; 4]) {
         let points = self.factors.len() / (self.dim * self.dim);
         let x = (u.ln() - self.log_first) / self.log_step;
-        let i = (x.floor() as usize).clamp(1, points - 3);
+        // The cast truncates and saturates below zero, which is the floor wherever the clamp keeps it.
+        let i = (x as usize).clamp(1, points - 3);
         let t = x - i as f64;
         let weights = [
             -t * (t - 1.0) * (t - 2.0) / 6.0,
