@@ -320,25 +320,23 @@ fn linear_block<const M: usize, const K: usize, const KI: usize>(
     }
 }
 
-/// [`linear_block`] for the batch's modes and lags.
+/// [`linear_block`] for the batch's modes and lags: one instance per (M, K, KI) listed, the shapes
+/// the paper's structures take (inputs at lag 0 or up to the output lags).
+macro_rules! dense_shapes {
+    ($dense:ident, $inputs:ident, $outputs:ident, $h:ident, $from:ident, $len:ident;
+     $(($m:literal, $k:literal, $ki:literal)),*) => {
+        match ($dense.constant.len(), $dense.slots, $dense.input_slots) {
+            $(($m, $k, $ki) => linear_block::<$m, $k, $ki>($dense, $inputs, $outputs, $h, $from, $len),)*
+            other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
+        }
+    };
+}
+
 #[inline(always)]
 fn dense_block(dense: &DenseLinear, inputs: &[Lanes], outputs: &mut [Lanes], h: usize, from: usize, len: usize) {
-    // One instance per shape the paper's structures take: inputs at lag 0 or up to the output lags.
-    match (dense.constant.len(), dense.slots, dense.input_slots) {
-        (1, 2, 1) => linear_block::<1, 2, 1>(dense, inputs, outputs, h, from, len),
-        (2, 2, 1) => linear_block::<2, 2, 1>(dense, inputs, outputs, h, from, len),
-        (3, 2, 1) => linear_block::<3, 2, 1>(dense, inputs, outputs, h, from, len),
-        (1, 3, 1) => linear_block::<1, 3, 1>(dense, inputs, outputs, h, from, len),
-        (2, 3, 1) => linear_block::<2, 3, 1>(dense, inputs, outputs, h, from, len),
-        (3, 3, 1) => linear_block::<3, 3, 1>(dense, inputs, outputs, h, from, len),
-        (1, 2, 2) => linear_block::<1, 2, 2>(dense, inputs, outputs, h, from, len),
-        (2, 2, 2) => linear_block::<2, 2, 2>(dense, inputs, outputs, h, from, len),
-        (3, 2, 2) => linear_block::<3, 2, 2>(dense, inputs, outputs, h, from, len),
-        (1, 3, 3) => linear_block::<1, 3, 3>(dense, inputs, outputs, h, from, len),
-        (2, 3, 3) => linear_block::<2, 3, 3>(dense, inputs, outputs, h, from, len),
-        (3, 3, 3) => linear_block::<3, 3, 3>(dense, inputs, outputs, h, from, len),
-        other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
-    }
+    dense_shapes!(dense, inputs, outputs, h, from, len;
+        (1, 2, 1), (2, 2, 1), (3, 2, 1), (1, 3, 1), (2, 3, 1), (3, 3, 1),
+        (1, 2, 2), (2, 2, 2), (3, 2, 2), (1, 3, 3), (2, 3, 3), (3, 3, 3))
 }
 
 fn dispatch(
