@@ -7,20 +7,23 @@
 //! step interpolates the modes' forces for all lanes at once from lane-major copies of the wind's
 //! generation grid, then sums each mode's terms. Structures made only of the constant and lagged
 //! inputs and outputs to the first power (what the paper's selection finds) run as dense
-//! coefficient arrays with the modes and lags fixed at compile time, which keeps the recursion's
-//! state in registers; any other structure runs from term lists. Outputs are kept for blocks of
-//! [`BLOCK`] steps, which a [`Sink`] reduces.
+//! coefficient arrays with the modes and lags fixed at compile time, in one loop that interpolates,
+//! recurses, reduces the outputs (a [`Sink`]) and accumulates the divergence test, with the state in
+//! registers; any other structure runs from term lists, a block of [`BLOCK`] steps at a time.
 //!
-//! No fused multiply-adds are used and no operation mixes lanes, so a lane's result does not depend
-//! on the instruction set or on which samples share its batch.
+//! Every product that is summed is a fused multiply-add (`f64::mul_add`: one rounding, the same on
+//! every processor; the SIMD versions are only chosen where the processor has FMA) and no operation
+//! mixes lanes, so a lane's result does not depend on the instruction set or on which samples share
+//! its batch.
 
 use super::narx::{DIVERGENCE_BOUND, NarxTerm, diverged, rest_output};
+use super::simd::{self, Vector};
 use crate::error::{Error, Result};
 use crate::wind::{CoarseModalForces, CoarseSeries, CubicSchedule, ModalForces};
 
 /// Samples per batch: one AVX-512 register of f64, two AVX2 ones.
 pub const LANES: usize = 8;
-/// Steps per block of forces.
+/// Steps per block: the granularity of the divergence test and of [`Sink::Blocks`].
 const BLOCK: usize = 512;
 
 pub type Lanes = [f64; LANES];
@@ -209,7 +212,7 @@ const DENSE_LAGS: usize = 2;
 
 /// The models of a batch as dense coefficient arrays, zero where a term is absent, when every term
 /// is the constant, Q_m(t − k) or y_s(t − k) with k ≤ [`DENSE_LAGS`] — which is what the paper's
-/// structures select. With the modes and lags then fixed at compile time ([`linear_block`]) the last
+/// structures select. With the modes and lags then fixed at compile time ([`dense_steps`]) the last
 /// outputs are kept in local arrays the compiler can hold in registers, instead of being read back
 /// from the output buffer every step (with AVX2, 8 lanes × 3 modes × 2 lags still spill a few).
 struct DenseLinear {
@@ -258,83 +261,260 @@ impl DenseLinear {
     }
 }
 
-/// Steps `from..len` of a block by the dense linear models, M modes, K output lag slots and KI input
-/// lag slots (the first KI of the K stored); `inputs` and `outputs` laid out as in [`recurse`]. The
-/// sum of each step takes the constant, the inputs, the
-/// older outputs and the newest outputs last, so that only the last few additions wait on the
-/// previous step.
-#[inline(always)]
-#[allow(clippy::needless_range_loop)] // index loops over the fixed sizes: see the first comment
-fn linear_block<const M: usize, const K: usize, const KI: usize>(
-    dense: &DenseLinear,
-    inputs: &[Lanes],
-    outputs: &mut [Lanes],
-    h: usize,
-    from: usize,
-    len: usize,
-) {
-    // Plain index loops and zero-initialised arrays throughout: `std::array::from_fn` is not inlined
-    // into the instruction-set wrappers, and its calls kept the state out of registers.
-    let mut constant = [[0.0; LANES]; M];
-    let mut input = [[[0.0; LANES]; M]; KI];
-    let mut output = [[[[0.0; LANES]; M]; M]; K];
-    // recent[k][s] = y_s(t − k) for the step t about to be computed (slot 0 unused).
-    let mut recent = [[[0.0; LANES]; M]; K];
-    for m in 0..M {
-        constant[m] = dense.constant[m];
-        for k in 0..K {
-            if k < KI {
-                input[k][m] = dense.input[k * M + m];
-            }
-            for s in 0..M {
-                output[k][m][s] = dense.output[(k * M + m) * M + s];
-            }
-            if k > 0 {
-                recent[k][m] = outputs[(h + from - k) * M + m];
-            }
+/// What the dense recursion does with each step's outputs, inside its own loop.
+trait StepSink<V: Vector, const M: usize> {
+    /// Step `i` of the block (counted from the block's first step) gave `y[m]`, every lane.
+    fn take(&mut self, i: usize, y: &[V; M]);
+}
+
+/// Per lane the running peak of |offset + Σ_m gain_m ŷ_m| (see [`Sink::Peaks`]).
+struct PeakTracker<V, const M: usize> {
+    gains: [V; M],
+    offsets: V,
+    peaks: V,
+}
+
+impl<V: Vector, const M: usize> StepSink<V, M> for PeakTracker<V, M> {
+    #[inline(always)]
+    fn take(&mut self, _: usize, y: &[V; M]) {
+        let mut u = self.offsets;
+        for (gain, y) in self.gains.iter().zip(y) {
+            u = gain.mul_add(*y, u);
         }
-    }
-    for i in from..len {
-        let here = h + i;
-        let mut next = constant;
-        for m in 0..M {
-            for k in 0..KI {
-                let q = &inputs[(here - k) * M + m];
-                for l in 0..LANES {
-                    next[m][l] += input[k][m][l] * q[l];
-                }
-            }
-            for k in (1..K).rev() {
-                for s in 0..M {
-                    for l in 0..LANES {
-                        next[m][l] += output[k][m][s][l] * recent[k][s][l];
-                    }
-                }
-            }
-        }
-        for k in (2..K).rev() {
-            recent[k] = recent[k - 1];
-        }
-        recent[1] = next;
-        outputs[here * M..(here + 1) * M].copy_from_slice(&next);
+        // A NaN is caught by the divergence test of the block, whatever `max` makes of it.
+        self.peaks = u.abs().max(self.peaks);
     }
 }
 
-/// [`linear_block`] for the batch's modes and lags: one instance per (M, K, KI) listed, the shapes
+/// The block's outputs as `outputs[i·M + m]`.
+struct Recorder<'a> {
+    outputs: &'a mut [Lanes],
+}
+
+impl<V: Vector, const M: usize> StepSink<V, M> for Recorder<'_> {
+    #[inline(always)]
+    fn take(&mut self, i: usize, y: &[V; M]) {
+        for (y, to) in y.iter().zip(&mut self.outputs[i * M..(i + 1) * M]) {
+            y.store(to);
+        }
+    }
+}
+
+/// The state the dense recursion carries from one block to the next: the last two outputs and
+/// inputs of every mode (the dense models look back at most [`DENSE_LAGS`] steps).
+#[derive(Clone, Copy)]
+struct Carry<V, const M: usize> {
+    /// ŷ(t − 1) and ŷ(t − 2) before step t.
+    last: [V; M],
+    before: [V; M],
+    /// q(t − 1) and q(t − 2) before step t.
+    last_input: [V; M],
+    before_input: [V; M],
+}
+
+/// The scaled input of one mode at an instant: cubic convolution of the four coarse points from
+/// `p` with weights `w`, every lane.
+#[inline(always)]
+fn interpolate<V: Vector>(coarse: &[Lanes], p: usize, w: &[V; 4]) -> V {
+    let y = &coarse[p..p + 4];
+    let first = w[0].mul(V::load(&y[0]));
+    w[3].mul_add(V::load(&y[3]), w[2].mul_add(V::load(&y[2]), w[1].mul_add(V::load(&y[1]), first)))
+}
+
+/// The four interpolation weights, each in every lane.
+#[inline(always)]
+fn splat_weights<V: Vector>(w: &[f64; 4]) -> [V; 4] {
+    [V::splat(w[0]), V::splat(w[1]), V::splat(w[2]), V::splat(w[3])]
+}
+
+/// Steps `first..first + len` (first ≥ 1) by the dense linear models, M modes, K output lag slots
+/// and KI input lag slots, each step's inputs interpolated from the lane-major coarse inputs and
+/// its outputs handed to `sink` as step `i + sink_offset`. Returns the sum over the steps of each
+/// lane's squared outputs, which the caller tests for divergence once per block. Interpolation,
+/// recursion, reduction and check share one loop, so the outputs never go through memory; the sum
+/// of each step takes the constant, the inputs, the older outputs and the newest outputs last, so
+/// that only the last few operations wait on the previous step.
+#[inline(always)]
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)] // index loops over the fixed sizes
+fn dense_steps<V: Vector, const M: usize, const K: usize, const KI: usize>(
+    dense: &DenseLinear,
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    carry: &mut Carry<V, M>,
+    first: usize,
+    len: usize,
+    sink_offset: usize,
+    sink: &mut impl StepSink<V, M>,
+) -> Lanes {
+    let zero = V::splat(0.0);
+    let mut constant = [zero; M];
+    let mut input = [[zero; M]; KI];
+    let mut output = [[[zero; M]; M]; K];
+    let mut modes: [&[Lanes]; M] = [&[]; M];
+    for m in 0..M {
+        constant[m] = V::load(&dense.constant[m]);
+        modes[m] = &coarse[m];
+        for k in 0..K {
+            if k < KI {
+                input[k][m] = V::load(&dense.input[k * M + m]);
+            }
+            for s in 0..M {
+                output[k][m][s] = V::load(&dense.output[(k * M + m) * M + s]);
+            }
+        }
+    }
+    let Carry { mut last, mut before, mut last_input, mut before_input } = *carry;
+    let mut squares = zero;
+    schedule.for_each(
+        first,
+        len,
+        #[inline(always)]
+        |i, p, w| {
+            let w = splat_weights::<V>(w);
+            let mut q = [zero; M];
+            for m in 0..M {
+                q[m] = interpolate(modes[m], p, &w);
+            }
+            let mut next = constant;
+            for m in 0..M {
+                next[m] = input[0][m].mul_add(q[m], next[m]);
+                if KI > 1 {
+                    next[m] = input[1 % KI][m].mul_add(last_input[m], next[m]);
+                }
+                if KI > 2 {
+                    next[m] = input[2 % KI][m].mul_add(before_input[m], next[m]);
+                }
+                if K > 2 {
+                    for s in 0..M {
+                        next[m] = output[2 % K][m][s].mul_add(before[s], next[m]);
+                    }
+                }
+                for s in 0..M {
+                    next[m] = output[1][m][s].mul_add(last[s], next[m]);
+                }
+            }
+            before_input = last_input;
+            last_input = q;
+            before = last;
+            last = next;
+            for m in 0..M {
+                squares = next[m].mul_add(next[m], squares);
+            }
+            sink.take(i + sink_offset, &next);
+        },
+    );
+    *carry = Carry { last, before, last_input, before_input };
+    let mut sums = [0.0; LANES];
+    squares.store(&mut sums);
+    sums
+}
+
+/// Whether a block whose outputs have these per-lane sums of squares may have left the bound (or
+/// produced a NaN). A single output beyond the bound makes the sum exceed its square, so a block
+/// that passes is sane; one that fails is searched output by output.
+#[inline(always)]
+fn suspicious(squares: &Lanes) -> bool {
+    let mut sane = true;
+    for s in squares {
+        sane &= *s <= DIVERGENCE_BOUND * DIVERGENCE_BOUND;
+    }
+    !sane
+}
+
+/// The whole storm by the dense linear models: step 0 at rest, then blocks of [`BLOCK`] steps into
+/// `sink`. A block that fails the cheap divergence test is run again from its start into memory
+/// and searched, so the error names the first step out of bounds.
+#[inline(always)]
+fn dense_run<V: Vector, const M: usize, const K: usize, const KI: usize>(
+    dense: &DenseLinear,
+    rests: &[Lanes],
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    steps: usize,
+    sink: &mut Sink,
+) -> std::result::Result<(), Divergence> {
+    let zero = V::splat(0.0);
+    let mut rest = [zero; M];
+    for (rest, from) in rest.iter_mut().zip(rests) {
+        *rest = V::load(from);
+    }
+    let mut carry = Carry { last: rest, before: rest, last_input: [zero; M], before_input: [zero; M] };
+    schedule.for_each(0, 1, |_, p, w| {
+        for (input, coarse) in carry.last_input.iter_mut().zip(coarse) {
+            *input = interpolate(coarse, p, &splat_weights(w));
+        }
+    });
+    let mut block = vec![[0.0; LANES]; BLOCK * M];
+    let mut first = 0;
+    while first < steps {
+        let len = BLOCK.min(steps - first);
+        // Step 0 is the rest state; every later step is computed.
+        let from = first.max(1);
+        let (count, offset) = (first + len - from, from - first);
+        let start = carry;
+        let squares = match sink {
+            Sink::Peaks { gains, offsets, peaks } => {
+                let mut tracker = PeakTracker { gains: [zero; M], offsets: V::load(offsets), peaks: V::load(peaks) };
+                for m in 0..M {
+                    tracker.gains[m] = V::splat(gains[m]);
+                }
+                if first == 0 {
+                    tracker.take(0, &rest);
+                }
+                let squares =
+                    dense_steps::<V, M, K, KI>(dense, schedule, coarse, &mut carry, from, count, offset, &mut tracker);
+                tracker.peaks.store(peaks);
+                squares
+            }
+            Sink::Blocks(_) => {
+                let mut recorder = Recorder { outputs: &mut block };
+                if first == 0 {
+                    recorder.take(0, &rest);
+                }
+                dense_steps::<V, M, K, KI>(dense, schedule, coarse, &mut carry, from, count, offset, &mut recorder)
+            }
+        };
+        if suspicious(&squares) {
+            let mut replay = start;
+            let mut recorder = Recorder { outputs: &mut block };
+            if first == 0 {
+                recorder.take(0, &rest);
+            }
+            dense_steps::<V, M, K, KI>(dense, schedule, coarse, &mut replay, from, count, offset, &mut recorder);
+            if let Some(divergence) = first_divergence(&block[..len * M], M, first) {
+                return Err(divergence);
+            }
+        }
+        if let Sink::Blocks(consume) = sink {
+            consume(first, &block[..len * M]);
+        }
+        first += len;
+    }
+    Ok(())
+}
+
+/// [`dense_run`] for the batch's modes and lags: one instance per (M, K, KI) listed, the shapes
 /// the paper's structures take (inputs at lag 0 or up to the output lags).
 macro_rules! dense_shapes {
-    ($dense:ident, $inputs:ident, $outputs:ident, $h:ident, $from:ident, $len:ident;
+    ($dense:ident, $rests:ident, $schedule:ident, $coarse:ident, $steps:ident, $sink:ident;
      $(($m:literal, $k:literal, $ki:literal)),*) => {
         match ($dense.constant.len(), $dense.slots, $dense.input_slots) {
-            $(($m, $k, $ki) => linear_block::<$m, $k, $ki>($dense, $inputs, $outputs, $h, $from, $len),)*
+            $(($m, $k, $ki) => dense_run::<V, $m, $k, $ki>($dense, $rests, $schedule, $coarse, $steps, $sink),)*
             other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
         }
     };
 }
 
 #[inline(always)]
-fn dense_block(dense: &DenseLinear, inputs: &[Lanes], outputs: &mut [Lanes], h: usize, from: usize, len: usize) {
-    dense_shapes!(dense, inputs, outputs, h, from, len;
+fn dense_storm<V: Vector>(
+    dense: &DenseLinear,
+    rests: &[Lanes],
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    steps: usize,
+    sink: &mut Sink,
+) -> std::result::Result<(), Divergence> {
+    dense_shapes!(dense, rests, schedule, coarse, steps, sink;
         (1, 2, 1), (2, 2, 1), (3, 2, 1), (1, 3, 1), (2, 3, 1), (3, 3, 1),
         (1, 2, 2), (2, 2, 2), (3, 2, 2), (1, 3, 3), (2, 3, 3), (3, 3, 3))
 }
@@ -348,21 +528,22 @@ fn dispatch(
 ) -> std::result::Result<(), Divergence> {
     #[cfg(target_arch = "x86_64")]
     {
-        if std::arch::is_x86_feature_detected!("avx512f") {
+        if std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("fma") {
             // SAFETY: the processor has the features the function is compiled for.
             return unsafe { recurse_avx512(state, samples, steps, time_step, sink) };
         }
-        if std::arch::is_x86_feature_detected!("avx2") {
+        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
             // SAFETY: as above.
             return unsafe { recurse_avx2(state, samples, steps, time_step, sink) };
         }
     }
-    recurse(state, samples, steps, time_step, sink)
+    recurse::<Lanes>(state, samples, steps, time_step, sink)
 }
 
-/// `recurse` compiled for an instruction set the processor is checked for at run time.
+/// `recurse` on the vectors of an instruction set, compiled for it; called only where the
+/// processor was checked for it at run time.
 macro_rules! recurse_with {
-    ($name:ident, $features:literal) => {
+    ($name:ident, $vector:ident, $features:literal) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = $features)]
         unsafe fn $name(
@@ -372,13 +553,13 @@ macro_rules! recurse_with {
             time_step: f64,
             sink: &mut Sink,
         ) -> std::result::Result<(), Divergence> {
-            recurse(state, samples, steps, time_step, sink)
+            recurse::<simd::$vector>(state, samples, steps, time_step, sink)
         }
     };
 }
 
-recurse_with!(recurse_avx512, "avx512f");
-recurse_with!(recurse_avx2, "avx2");
+recurse_with!(recurse_avx512, Avx512, "avx512f,fma");
+recurse_with!(recurse_avx2, Avx2, "avx2,fma");
 
 #[inline(always)]
 fn power(x: &Lanes, p: u32) -> Lanes {
@@ -441,21 +622,25 @@ fn lane_inputs(
     (CubicSchedule::new(time_step, time_step), inputs)
 }
 
-/// The recursion itself, a block of steps at a time: the modes' inputs interpolated from the
-/// lane-major coarse inputs, then the outputs step by step (dense or by term lists). `inputs` and
-/// `outputs` hold `history` carried-over steps, then the block, the modes interleaved:
-/// outputs[(h + i)·modes + m]. Before t = 0 the outputs are at rest and the input deviations zero.
+/// The recursion itself: the dense models' fused loop when they apply, otherwise a block of steps
+/// at a time by the term lists, each block's inputs interpolated first from the lane-major coarse
+/// inputs. `inputs` and `outputs` hold `history` carried-over steps, then the block, the modes
+/// interleaved: outputs[(h + i)·modes + m]. Before t = 0 the outputs are at rest and the input
+/// deviations zero.
 #[inline(always)]
-fn recurse(
+fn recurse<V: Vector>(
     state: &State,
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
     sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
+    let (schedule, coarse) = lane_inputs(samples, &state.inverse_scales, steps, time_step);
+    if let Some(dense) = &state.dense {
+        return dense_storm::<V>(dense, &state.rests, &schedule, &coarse, steps, sink);
+    }
     let modes = state.rests.len();
     let h = state.history;
-    let (schedule, coarse) = lane_inputs(samples, &state.inverse_scales, steps, time_step);
     let mut inputs: Vec<Lanes> = vec![[0.0; LANES]; (h + BLOCK) * modes];
     let mut outputs: Vec<Lanes> = (0..(h + BLOCK) * modes).map(|k| state.rests[k % modes]).collect();
     let mut first = 0;
@@ -469,35 +654,24 @@ fn recurse(
             #[inline(always)]
             |i, p, w| {
                 for (m, lanes) in coarse.iter().enumerate() {
-                    let (y0, y1, y2, y3) = (&lanes[p], &lanes[p + 1], &lanes[p + 2], &lanes[p + 3]);
-                    let mut q = [0.0; LANES];
-                    for l in 0..LANES {
-                        q[l] = w[0] * y0[l] + w[1] * y1[l] + w[2] * y2[l] + w[3] * y3[l];
-                    }
-                    inputs[(h + i) * modes + m] = q;
+                    inputs[(h + i) * modes + m] = interpolate::<Lanes>(lanes, p, &splat_weights(w));
                 }
             },
         );
-        let from = usize::from(first == 0);
-        if let Some(dense) = &state.dense {
-            dense_block(dense, &inputs, &mut outputs, h, from, len);
-        } else {
-            general_block(state, &inputs, &mut outputs, from, len);
-        }
+        general_block(state, &inputs, &mut outputs, usize::from(first == 0), len);
+        let block = &outputs[h * modes..(h + len) * modes];
         // Checked once a block, so that the lanes never branch apart inside the recursion.
-        if let Some(divergence) = first_divergence(&outputs, modes, h, first, len) {
+        if let Some(divergence) = first_divergence(block, modes, first) {
             return Err(divergence);
         }
-        let block = &outputs[h * modes..(h + len) * modes];
         match sink {
             Sink::Blocks(consume) => consume(first, block),
             Sink::Peaks { gains, offsets, peaks } => {
                 for step in block.chunks_exact(modes) {
                     let mut u = *offsets;
                     for (y, g) in step.iter().zip(gains.iter()) {
-                        (0..LANES).for_each(|l| u[l] += g * y[l]);
+                        (0..LANES).for_each(|l| u[l] = g.mul_add(y[l], u[l]));
                     }
-                    // Branch-free, so it vectorises; the block passed the divergence check, no NaN.
                     for l in 0..LANES {
                         peaks[l] = peaks[l].max(u[l].abs());
                     }
@@ -526,21 +700,21 @@ fn general_block(state: &State, inputs: &[Lanes], outputs: &mut [Lanes], from: u
                     0 => (0..LANES).for_each(|l| value[l] += c[l]),
                     p => {
                         let g = power(&inputs[here - term.input_lag * modes + m], p);
-                        (0..LANES).for_each(|l| value[l] += c[l] * g[l]);
+                        (0..LANES).for_each(|l| value[l] = c[l].mul_add(g[l], value[l]));
                     }
                 }
             }
             for (back, c) in &state.linear[m] {
                 let y = &outputs[here - back];
                 for l in 0..LANES {
-                    value[l] += c[l] * y[l];
+                    value[l] = c[l].mul_add(y[l], value[l]);
                 }
             }
             for term in &state.feedback[m] {
                 let y = power(&outputs[here - term.output_lag * modes + term.source], term.output_power);
                 let q = power(&inputs[here - term.input_lag * modes + m], term.input_power);
                 for l in 0..LANES {
-                    value[l] += term.coefficient[l] * (y[l] * q[l]);
+                    value[l] = term.coefficient[l].mul_add(y[l] * q[l], value[l]);
                 }
             }
             outputs[here + m] = value;
@@ -548,9 +722,9 @@ fn general_block(state: &State, inputs: &[Lanes], outputs: &mut [Lanes], from: u
     }
 }
 
-/// The earliest (step, mode, lane) of a block whose output left the bound (a NaN counts as out).
-fn first_divergence(outputs: &[Lanes], modes: usize, h: usize, first: usize, len: usize) -> Option<Divergence> {
-    let block = &outputs[h * modes..(h + len) * modes];
+/// The earliest (step, mode, lane) of a block of outputs from step `first` whose output left the
+/// bound (a NaN counts as out).
+fn first_divergence(block: &[Lanes], modes: usize, first: usize) -> Option<Divergence> {
     // A branch-free pass over the block first; the search only where it failed.
     let mut sane = true;
     for lanes in block {

@@ -10,6 +10,7 @@ pub mod narx;
 mod parametrization;
 pub mod pce;
 pub mod phases;
+mod simd;
 
 pub use batch::{ForceSource, LANES};
 pub use calibrate::{CalibrationOptions, MAX_EXPERIMENTS, ModeDiagnostics, Observer, Progress, Silent, calibrate};

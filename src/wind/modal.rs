@@ -110,23 +110,14 @@ impl CrossSpectralDensity for ScaledSpectrum<'_> {
         }
     }
 
-    fn factor_column_sweep(
-        &self,
-        omega0: f64,
-        domega: f64,
-        count: usize,
-        m: usize,
-        visit: &mut dyn FnMut(usize, &[f64]),
-    ) {
+    fn factor_columns(&self, omega0: f64, domega: f64, m: usize, columns: &mut [f64]) {
         let n = self.table.dim;
         let scale = self.speed.powf(1.5);
-        let mut column = vec![0.0; n];
-        for l in 0..count {
+        for (l, column) in columns.chunks_exact_mut(n).enumerate() {
             let stencil = self.table.stencil((omega0 + l as f64 * domega) / self.speed);
             for (j, c) in column.iter_mut().enumerate().skip(m) {
                 *c = scale * self.table.entry(stencil, j * n + m);
             }
-            visit(l, &column);
         }
     }
 }
@@ -264,8 +255,11 @@ mod tests {
                     self.0.sweep(omega0, domega, count, visit)
                 }
             }
-            Plain(&scaled).factor_column_sweep(omega0, domega, 300, m, &mut |_, c| by_default.push(c[m..].to_vec()));
-            scaled.factor_column_sweep(omega0, domega, 300, m, &mut |_, c| direct.push(c[m..].to_vec()));
+            let (mut plain, mut table) = (vec![0.0; 300 * 3], vec![0.0; 300 * 3]);
+            Plain(&scaled).factor_columns(omega0, domega, m, &mut plain);
+            scaled.factor_columns(omega0, domega, m, &mut table);
+            by_default.extend(plain.chunks_exact(3).map(|c| c[m..].to_vec()));
+            direct.extend(table.chunks_exact(3).map(|c| c[m..].to_vec()));
         }
         for (a, b) in by_default.iter().zip(&direct) {
             for (x, y) in a.iter().zip(b) {

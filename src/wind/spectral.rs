@@ -12,10 +12,11 @@ use crate::error::{Error, Result};
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
 use rand::RngExt;
-use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
+use rustfft::{Fft, FftPlanner};
 use std::cell::RefCell;
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// A cross-spectral density evaluated along an arithmetic sequence of frequencies.
 pub trait CrossSpectralDensity {
@@ -24,27 +25,19 @@ pub trait CrossSpectralDensity {
     /// row-major n×n; at least its lower triangle is filled.
     fn sweep(&self, omega0: f64, domega: f64, count: usize, visit: &mut dyn FnMut(usize, &[f64]));
 
-    /// Calls `visit(l, c)` for ω_l = ω₀ + l·Δω, l < count, where c[j], j ≥ m, is column m of the
-    /// lower Cholesky factor of the CSD (entries above m unspecified). By default the CSD of every
-    /// frequency is factored through column m; a spectrum that knows its factor gives it directly.
-    fn factor_column_sweep(
-        &self,
-        omega0: f64,
-        domega: f64,
-        count: usize,
-        m: usize,
-        visit: &mut dyn FnMut(usize, &[f64]),
-    ) {
+    /// Column m of the lower Cholesky factor of the CSD at ω_l = ω₀ + l·Δω into `columns[l·n + j]`,
+    /// j ≥ m, for every line l < columns.len() / n (entries above m are left as they are). By
+    /// default the CSD of every frequency is factored through column m; a spectrum that knows its
+    /// factor gives it directly.
+    fn factor_columns(&self, omega0: f64, domega: f64, m: usize, columns: &mut [f64]) {
         let n = self.dim();
         let mut factor = vec![0.0; n * n];
-        let mut column = vec![0.0; n];
-        self.sweep(omega0, domega, count, &mut |l, s| {
+        self.sweep(omega0, domega, columns.len() / n, &mut |l, s| {
             factor.copy_from_slice(s);
             cholesky_through_column(&mut factor, n, m);
             for j in m..n {
-                column[j] = factor[j * n + m];
+                columns[l * n + j] = factor[j * n + m];
             }
-            visit(l, &column);
         });
     }
 }
@@ -69,8 +62,75 @@ impl SpectralGrid {
 }
 
 thread_local! {
-    /// Plans (and their twiddle factors) are computed once per length and thread, not per storm.
-    static PLANNER: RefCell<FftPlanner<f64>> = RefCell::new(FftPlanner::new());
+    /// Transforms (plans, twiddle factors, scratch) are built once per shape and thread, not per storm.
+    static TRANSFORMS: RefCell<Vec<PrunedInverse>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The inverse DFT of length M of a spectrum that is zero beyond its first `lines` bins, by R
+/// transforms of length L = M/R (R the largest divisor of M with L ≥ lines): output p = Rq + r is
+/// Σ_l b_l e^{2πilr/M} e^{2πilq/L}, the L-point transform of the twisted spectrum. On the paper's
+/// grid (M = 20 480, 2048 lines) ten 2048-point transforms that stay in the cache replace one of
+/// 20 480 whose input is nine-tenths zeros, and the zeros are never written.
+struct PrunedInverse {
+    len: usize,
+    lines: usize,
+    rows: usize,
+    row_len: usize,
+    fft: Arc<dyn Fft<f64>>,
+    /// twists[r·lines + l] = e^{2πi·lr/M}, each from its own exact angle.
+    twists: Vec<Complex<f64>>,
+    scratch: Vec<Complex<f64>>,
+    /// The transform's output, `process`'s return value.
+    output: Vec<Complex<f64>>,
+}
+
+impl PrunedInverse {
+    fn new(len: usize, lines: usize) -> Self {
+        assert!(lines <= len, "more lines than points");
+        let rows = (1..=len / lines).rev().find(|r| len.is_multiple_of(*r)).unwrap_or(1);
+        let row_len = len / rows;
+        let fft = FftPlanner::new().plan_fft_inverse(row_len);
+        let twists = (0..rows)
+            .flat_map(|r| (0..lines).map(move |l| (l * r) % len))
+            .map(|k| Complex::from_polar(1.0, 2.0 * PI * k as f64 / len as f64))
+            .collect();
+        let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
+        let output = vec![Complex::new(0.0, 0.0); len];
+        PrunedInverse { len, lines, rows, row_len, fft, twists, scratch, output }
+    }
+
+    /// Runs `f` with this thread's transform of the shape.
+    fn with<T>(len: usize, lines: usize, f: impl FnOnce(&mut PrunedInverse) -> T) -> T {
+        TRANSFORMS.with(|cache| {
+            let mut cache = cache.borrow_mut();
+            let index = match cache.iter().position(|t| t.len == len && t.lines == lines) {
+                Some(index) => index,
+                None => {
+                    cache.push(PrunedInverse::new(len, lines));
+                    cache.len() - 1
+                }
+            };
+            f(&mut cache[index])
+        })
+    }
+
+    /// out[r·L + q] = Σ_{l < lines} spectrum[l]·e^{2πi·l(Rq + r)/M}.
+    fn process(&mut self, spectrum: &[Complex<f64>]) -> &[Complex<f64>] {
+        let out = &mut self.output;
+        for (row, twists) in out.chunks_exact_mut(self.row_len).zip(self.twists.chunks_exact(self.lines)) {
+            for ((o, b), t) in row.iter_mut().zip(spectrum).zip(twists) {
+                *o = b * t;
+            }
+            row[self.lines..].fill(Complex::new(0.0, 0.0));
+        }
+        self.fft.process_with_scratch(out, &mut self.scratch);
+        out
+    }
+
+    /// The index in `process`'s output of the transform at point p.
+    fn position(&self, p: usize) -> (usize, usize) {
+        (p % self.rows, p / self.rows)
+    }
 }
 
 /// One realization on its generation grid: `series[j][q]` is component j at t = (q − 1)·step, so
@@ -171,20 +231,25 @@ impl CubicSchedule {
     }
 }
 
-/// e^{iφ} with φ uniform on [0, 2π): a point uniform in the unit disc (by rejection from the
-/// square, π/4 of the draws kept) projected on the circle. The same law as e^{2πiU} without a sine
-/// and a cosine per frequency (they were a tenth of a modal storm's cost). The few points within
-/// 10⁻⁶ of the centre are rejected too, which keeps the law rotation-invariant.
-pub(crate) fn unit_phase(rng: &mut Rng) -> Complex<f64> {
-    loop {
+/// `count` draws of e^{iφ} with φ uniform on [0, 2π): points uniform in the unit disc (by rejection
+/// from the square, π/4 of the draws kept) projected on the circle. The same law as e^{2πiU} without
+/// a sine and a cosine per frequency (they were a tenth of a modal storm's cost). The few points
+/// within 10⁻⁶ of the centre are rejected too, which keeps the law rotation-invariant. Every
+/// candidate is written and only the kept ones advance, so the processor has no branch to
+/// mispredict on a coin flip.
+pub(crate) fn unit_phases(rng: &mut Rng, count: usize) -> Vec<Complex<f64>> {
+    let mut phases = vec![Complex::new(0.0, 0.0); count + 1];
+    let mut kept = 0;
+    while kept < count {
         let x = 2.0 * rng.random::<f64>() - 1.0;
         let y = 2.0 * rng.random::<f64>() - 1.0;
         let r2 = x * x + y * y;
-        if r2 <= 1.0 && r2 > 1e-12 {
-            let scale = r2.sqrt().recip();
-            return Complex::new(x * scale, y * scale);
-        }
+        let scale = r2.sqrt().recip();
+        phases[kept] = Complex::new(x * scale, y * scale);
+        kept += usize::from(r2 <= 1.0 && r2 > 1e-12);
     }
+    phases.truncate(count);
+    phases
 }
 
 /// Simulates one realization of the process on `storm`'s time grid, generated every
@@ -221,7 +286,7 @@ pub fn simulate_coarse(
         ));
     }
     // e^{iφ_ml}, shared by every component j ≥ m.
-    let phases: Vec<Complex<f64>> = (0..n * lines).map(|_| unit_phase(rng)).collect();
+    let phases = unit_phases(rng, n * lines);
 
     let fft_len = fft_friendly((2.0 * PI / (domega * generation_step)).ceil().max(2.0 * lines as f64 + 1.0) as usize);
     let dt_g = 2.0 * PI / (fft_len as f64 * domega);
@@ -230,40 +295,48 @@ pub fn simulate_coarse(
     let count = ((duration + PI / grid.cutoff) / dt_g).ceil() as usize + 4;
 
     let mut coarse = vec![vec![0.0; count]; n];
-    let fft = PLANNER.with(|planner| planner.borrow_mut().plan_fft_inverse(fft_len));
-    let mut buffer = vec![Complex::new(0.0, 0.0); fft_len];
-    let mut scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
-    let mut column = vec![0.0; n * lines];
+    let mut spectrum = vec![Complex::new(0.0, 0.0); lines];
+    let mut columns = vec![0.0; n * lines];
     let mut modulation = vec![Complex::new(0.0, 0.0); count];
     let amplitude = 2.0 * domega.sqrt();
 
-    for m in 0..n {
-        let omega0 = (m + 1) as f64 * domega / n as f64;
-        // Column m of the Cholesky factor at every ω_ml, stored line-major: column[l·n + j].
-        csd.factor_column_sweep(omega0, domega, lines, m, &mut |l, c| {
-            column[l * n + m..(l + 1) * n].copy_from_slice(&c[m..]);
-        });
-        // e^{iω₀t} by rotation, anchored exactly every 64 instants (the drift stays at rounding level).
-        let rotation = Complex::from_polar(1.0, omega0 * dt_g);
-        let mut z = Complex::new(1.0, 0.0);
-        for (q, out) in modulation.iter_mut().enumerate() {
-            z = if q % 64 == 0 { Complex::from_polar(1.0, omega0 * (q as f64 - 1.0) * dt_g) } else { z * rotation };
-            *out = z;
-        }
-        for j in m..n {
-            buffer.iter_mut().for_each(|b| *b = Complex::new(0.0, 0.0));
-            for l in 0..lines {
-                let h = column[l * n + j];
-                buffer[l] = phases[m * lines + l] * (amplitude * h);
+    PrunedInverse::with(fft_len, lines, |transform| {
+        for m in 0..n {
+            let omega0 = (m + 1) as f64 * domega / n as f64;
+            // Column m of the Cholesky factor at every ω_ml, line-major: columns[l·n + j].
+            csd.factor_columns(omega0, domega, m, &mut columns);
+            // e^{iω₀t} by rotation, anchored exactly every 64 instants (the drift stays at rounding level).
+            let rotation = Complex::from_polar(1.0, omega0 * dt_g);
+            let mut z = Complex::new(1.0, 0.0);
+            for (q, out) in modulation.iter_mut().enumerate() {
+                z = if q % 64 == 0 { Complex::from_polar(1.0, omega0 * (q as f64 - 1.0) * dt_g) } else { z * rotation };
+                *out = z;
             }
-            fft.process_with_scratch(&mut buffer, &mut scratch);
-            // Coarse point q is instant q − 1 of the output, periodic in fft_len instants.
-            let periodic = std::iter::once(&buffer[fft_len - 1]).chain(buffer.iter().cycle());
-            for (out, (b, z)) in coarse[j].iter_mut().zip(periodic.zip(&modulation)) {
-                *out += (b * z).re;
+            for j in m..n {
+                let phases = &phases[m * lines..(m + 1) * lines];
+                for ((b, phase), column) in spectrum.iter_mut().zip(phases).zip(columns.chunks_exact(n)) {
+                    *b = phase * (amplitude * column[j]);
+                }
+                // Coarse point q is instant q − 1 of the transform, periodic in fft_len instants:
+                // walk its (row, column) position from the last instant on.
+                let (rows, row_len) = (transform.rows, transform.row_len);
+                let (mut r, mut c) = transform.position(fft_len - 1);
+                let transformed = transform.process(&spectrum);
+                for (out, z) in coarse[j].iter_mut().zip(&modulation) {
+                    let x = transformed[r * row_len + c];
+                    *out += x.re * z.re - x.im * z.im;
+                    r += 1;
+                    if r == rows {
+                        r = 0;
+                        c += 1;
+                        if c == row_len {
+                            c = 0;
+                        }
+                    }
+                }
             }
         }
-    }
+    });
     Ok(CoarseSeries { step: dt_g, series: coarse })
 }
 
@@ -336,7 +409,7 @@ mod tests {
     fn phases_are_uniform_on_the_circle() {
         let mut rng = rng_from_seed(5);
         let n = 200_000;
-        let z: Vec<Complex<f64>> = (0..n).map(|_| unit_phase(&mut rng)).collect();
+        let z = unit_phases(&mut rng, n);
         assert!(z.iter().all(|z| (z.norm() - 1.0).abs() < 1e-15));
         let bound = 5.0 / (2.0 * n as f64).sqrt();
         for k in 1..=4 {
@@ -357,7 +430,7 @@ mod tests {
         let storm = StormGrid { duration: 40.0 * dt, time_step: dt };
         let v = simulate(&csd, &grid, dt, &storm, &mut rng_from_seed(11)).unwrap();
         let mut rng = rng_from_seed(11);
-        let phases: Vec<Complex<f64>> = (0..64).map(|_| unit_phase(&mut rng)).collect();
+        let phases = unit_phases(&mut rng, 64);
         let h = [[1.0, 0.0], [-0.4, (1.0f64 - 0.16).sqrt()]];
         let dw = grid.step();
         for (i, t) in (0..storm.steps()).map(|i| (i, i as f64 * dt)) {

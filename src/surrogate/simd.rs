@@ -1,0 +1,208 @@
+//! Eight f64 lanes as one value, on three instruction sets: AVX-512 (one register), AVX2 (two)
+//! and portable arrays. The batch's dense recursion is written once over [`Vector`] and compiled
+//! for each. Arrays of `[f64; 8]` alone were not enough: the compiler scalarised the recursion's
+//! state and regrouped it into vectors that straddle two modes, paying lane permutations every step.
+//!
+//! Every implementation rounds identically (products that are summed are fused multiply-adds, the
+//! same operation in hardware and in `f64::mul_add`), so a lane's result does not depend on which
+//! one runs.
+//!
+//! The x86 types call instructions the processor may lack: they are only used inside functions
+//! compiled for those features and called after the features were detected (`batch::dispatch`).
+
+use super::batch::{LANES, Lanes};
+
+/// Lane-wise arithmetic on eight f64.
+pub trait Vector: Copy {
+    fn splat(x: f64) -> Self;
+    fn load(x: &Lanes) -> Self;
+    fn store(self, to: &mut Lanes);
+    /// self·b + c, rounded once.
+    fn mul_add(self, b: Self, c: Self) -> Self;
+    fn mul(self, b: Self) -> Self;
+    fn abs(self) -> Self;
+    /// The larger of the two; where either is NaN, `b` (the x86 rule, one instruction).
+    fn max(self, b: Self) -> Self;
+}
+
+impl Vector for Lanes {
+    #[inline(always)]
+    fn splat(x: f64) -> Self {
+        [x; LANES]
+    }
+    #[inline(always)]
+    fn load(x: &Lanes) -> Self {
+        *x
+    }
+    #[inline(always)]
+    fn store(self, to: &mut Lanes) {
+        *to = self;
+    }
+    #[inline(always)]
+    fn mul_add(self, b: Self, c: Self) -> Self {
+        let mut out = [0.0; LANES];
+        for l in 0..LANES {
+            out[l] = self[l].mul_add(b[l], c[l]);
+        }
+        out
+    }
+    #[inline(always)]
+    fn mul(self, b: Self) -> Self {
+        let mut out = [0.0; LANES];
+        for l in 0..LANES {
+            out[l] = self[l] * b[l];
+        }
+        out
+    }
+    #[inline(always)]
+    fn abs(self) -> Self {
+        self.map(f64::abs)
+    }
+    #[inline(always)]
+    fn max(self, b: Self) -> Self {
+        let mut out = [0.0; LANES];
+        for l in 0..LANES {
+            out[l] = if self[l] > b[l] { self[l] } else { b[l] };
+        }
+        out
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+pub use x86::{Avx2, Avx512};
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::{Lanes, Vector};
+    use std::arch::x86_64::*;
+
+    /// One AVX-512 register. Only for code compiled with `avx512f` running where it was detected.
+    #[derive(Clone, Copy)]
+    pub struct Avx512(__m512d);
+
+    // SAFETY (every block below): see the type's doc; the loads and stores read and write whole
+    // `[f64; 8]` through references.
+    impl Vector for Avx512 {
+        #[inline(always)]
+        fn splat(x: f64) -> Self {
+            Avx512(unsafe { _mm512_set1_pd(x) })
+        }
+        #[inline(always)]
+        fn load(x: &Lanes) -> Self {
+            Avx512(unsafe { _mm512_loadu_pd(x.as_ptr()) })
+        }
+        #[inline(always)]
+        fn store(self, to: &mut Lanes) {
+            unsafe { _mm512_storeu_pd(to.as_mut_ptr(), self.0) }
+        }
+        #[inline(always)]
+        fn mul_add(self, b: Self, c: Self) -> Self {
+            Avx512(unsafe { _mm512_fmadd_pd(self.0, b.0, c.0) })
+        }
+        #[inline(always)]
+        fn mul(self, b: Self) -> Self {
+            Avx512(unsafe { _mm512_mul_pd(self.0, b.0) })
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            Avx512(unsafe { _mm512_abs_pd(self.0) })
+        }
+        #[inline(always)]
+        fn max(self, b: Self) -> Self {
+            Avx512(unsafe { _mm512_max_pd(self.0, b.0) })
+        }
+    }
+
+    /// Two AVX2 registers. Only for code compiled with `avx2,fma` running where they were detected.
+    #[derive(Clone, Copy)]
+    pub struct Avx2(__m256d, __m256d);
+
+    // SAFETY (every block below): as for `Avx512`; `add(4)` stays inside the eight lanes.
+    impl Vector for Avx2 {
+        #[inline(always)]
+        fn splat(x: f64) -> Self {
+            unsafe { Avx2(_mm256_set1_pd(x), _mm256_set1_pd(x)) }
+        }
+        #[inline(always)]
+        fn load(x: &Lanes) -> Self {
+            unsafe { Avx2(_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(x.as_ptr().add(4))) }
+        }
+        #[inline(always)]
+        fn store(self, to: &mut Lanes) {
+            unsafe {
+                _mm256_storeu_pd(to.as_mut_ptr(), self.0);
+                _mm256_storeu_pd(to.as_mut_ptr().add(4), self.1);
+            }
+        }
+        #[inline(always)]
+        fn mul_add(self, b: Self, c: Self) -> Self {
+            unsafe { Avx2(_mm256_fmadd_pd(self.0, b.0, c.0), _mm256_fmadd_pd(self.1, b.1, c.1)) }
+        }
+        #[inline(always)]
+        fn mul(self, b: Self) -> Self {
+            unsafe { Avx2(_mm256_mul_pd(self.0, b.0), _mm256_mul_pd(self.1, b.1)) }
+        }
+        #[inline(always)]
+        fn abs(self) -> Self {
+            unsafe {
+                let sign = _mm256_set1_pd(-0.0);
+                Avx2(_mm256_andnot_pd(sign, self.0), _mm256_andnot_pd(sign, self.1))
+            }
+        }
+        #[inline(always)]
+        fn max(self, b: Self) -> Self {
+            unsafe { Avx2(_mm256_max_pd(self.0, b.0), _mm256_max_pd(self.1, b.1)) }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn exercise<V: Vector>() -> [Lanes; 4] {
+        let a: Lanes = [1.5, -2.0, 0.1, 3.0, -0.0, 7.0, -1e-300, 2.5];
+        let b: Lanes = [0.3, 0.7, -0.1, 1e16, 2.0, -3.0, 1e300, 0.4];
+        let c: Lanes = [1.0, -1.0, 0.01, -1.0, 0.0, 21.0, 1.0, -1.0];
+        let (va, vb, vc) = (V::load(&a), V::load(&b), V::load(&c));
+        let mut out = [[0.0; LANES]; 4];
+        va.mul_add(vb, vc).store(&mut out[0]);
+        va.mul(vb).store(&mut out[1]);
+        va.abs().store(&mut out[2]);
+        va.max(vb).mul_add(V::splat(2.0), V::splat(0.5)).store(&mut out[3]);
+        out
+    }
+
+    /// The instruction sets agree with the portable arrays bit for bit (the fused multiply-add of
+    /// 3·10¹⁶ − 1 keeps the 1 that a separate product would round away).
+    #[test]
+    fn instruction_sets_agree_bit_for_bit() {
+        let portable = exercise::<Lanes>();
+        assert_eq!(portable[0][3], 3.0f64.mul_add(1e16, -1.0));
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                // SAFETY: the feature was detected.
+                let got = unsafe { avx512() };
+                assert_eq!(got.map(|r| r.map(f64::to_bits)), portable.map(|r| r.map(f64::to_bits)));
+            }
+            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+                // SAFETY: the features were detected.
+                let got = unsafe { avx2() };
+                assert_eq!(got.map(|r| r.map(f64::to_bits)), portable.map(|r| r.map(f64::to_bits)));
+            }
+        }
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,fma")]
+    fn avx512() -> [Lanes; 4] {
+        exercise::<Avx512>()
+    }
+
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx2,fma")]
+    fn avx2() -> [Lanes; 4] {
+        exercise::<Avx2>()
+    }
+}
