@@ -3,6 +3,10 @@
 //! Run with `cargo bench --bench physics`; BENCH_PRESET, BENCH_REPETITIONS, BENCH_EXPERIMENTS and
 //! BENCH_SAMPLES change the sizes.
 
+/// The allocator `windmeta` itself runs on (see `src/main.rs`), so that the figures are the same.
+#[global_allocator]
+static ALLOCATOR: mimalloc::MiMalloc = mimalloc::MiMalloc;
+
 fn main() {
     let var = |name: &str, default: usize| std::env::var(name).ok().and_then(|v| v.parse().ok()).unwrap_or(default);
     let args = windmeta::cli::BenchArgs {
