@@ -213,8 +213,8 @@ const DENSE_LAGS: usize = 2;
 /// The models of a batch as dense coefficient arrays, zero where a term is absent, when every term
 /// is the constant, Q_m(t − k) or y_s(t − k) with k ≤ [`DENSE_LAGS`] — which is what the paper's
 /// structures select. With the modes and lags then fixed at compile time ([`dense_steps`]) the last
-/// outputs are kept in local arrays the compiler can hold in registers, instead of being read back
-/// from the output buffer every step (with AVX2, 8 lanes × 3 modes × 2 lags still spill a few).
+/// outputs are kept in local variables the compiler can hold in registers, instead of being read
+/// back from the output buffer every step.
 struct DenseLinear {
     /// Lag slots K = longest lag + 1 (slot 0 is the present, read only by input terms).
     slots: usize,
@@ -452,6 +452,14 @@ fn dense_run<V: Vector, const M: usize, const K: usize, const KI: usize>(
         let from = first.max(1);
         let (count, offset) = (first + len - from, from - first);
         let start = carry;
+        // The block's outputs into `block`, step 0's rest first when the block starts the storm.
+        let record = |carry: &mut Carry<V, M>, block: &mut [Lanes]| {
+            let mut recorder = Recorder { outputs: block };
+            if first == 0 {
+                recorder.take(0, &rest);
+            }
+            dense_steps::<V, M, K, KI>(dense, schedule, coarse, carry, from, count, offset, &mut recorder)
+        };
         let squares = match sink {
             Sink::Peaks { gains, offsets, peaks } => {
                 let mut tracker = PeakTracker { gains: [zero; M], offsets: V::load(offsets), peaks: V::load(peaks) };
@@ -466,21 +474,11 @@ fn dense_run<V: Vector, const M: usize, const K: usize, const KI: usize>(
                 tracker.peaks.store(peaks);
                 squares
             }
-            Sink::Blocks(_) => {
-                let mut recorder = Recorder { outputs: &mut block };
-                if first == 0 {
-                    recorder.take(0, &rest);
-                }
-                dense_steps::<V, M, K, KI>(dense, schedule, coarse, &mut carry, from, count, offset, &mut recorder)
-            }
+            Sink::Blocks(_) => record(&mut carry, &mut block),
         };
         if suspicious(&squares) {
             let mut replay = start;
-            let mut recorder = Recorder { outputs: &mut block };
-            if first == 0 {
-                recorder.take(0, &rest);
-            }
-            dense_steps::<V, M, K, KI>(dense, schedule, coarse, &mut replay, from, count, offset, &mut recorder);
+            record(&mut replay, &mut block);
             if let Some(divergence) = first_divergence(&block[..len * M], M, first) {
                 return Err(divergence);
             }

@@ -312,8 +312,8 @@ pub fn simulate_coarse(
                 z = if q % 64 == 0 { Complex::from_polar(1.0, omega0 * (q as f64 - 1.0) * dt_g) } else { z * rotation };
                 *out = z;
             }
+            let phases = &phases[m * lines..(m + 1) * lines];
             for j in m..n {
-                let phases = &phases[m * lines..(m + 1) * lines];
                 for ((b, phase), column) in spectrum.iter_mut().zip(phases).zip(columns.chunks_exact(n)) {
                     *b = phase * (amplitude * column[j]);
                 }
