@@ -5,6 +5,7 @@
 
 mod forces;
 mod modal;
+mod pruned;
 mod site;
 mod spectral;
 mod spectrum;

@@ -8,15 +8,12 @@
 //! process is T̂ = 2πn/Δω.
 
 use super::StormGrid;
+use super::pruned::{Bin, PolyphaseSum, PrunedInverse};
 use crate::error::{Error, Result};
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
 use rand::RngExt;
-use rustfft::num_complex::Complex;
-use rustfft::{Fft, FftPlanner};
-use std::cell::RefCell;
 use std::f64::consts::PI;
-use std::sync::Arc;
 
 /// A cross-spectral density evaluated along an arithmetic sequence of frequencies.
 pub trait CrossSpectralDensity {
@@ -58,78 +55,6 @@ impl SpectralGrid {
     /// Period T̂ = 2πn/Δω of an n-variate simulation (Eq. 17).
     pub fn period(&self, n: usize) -> f64 {
         2.0 * PI * n as f64 / self.step()
-    }
-}
-
-thread_local! {
-    /// Transforms (plans, twiddle factors, scratch) are built once per shape and thread, not per storm.
-    static TRANSFORMS: RefCell<Vec<PrunedInverse>> = const { RefCell::new(Vec::new()) };
-}
-
-/// The inverse DFT of length M of a spectrum that is zero beyond its first `lines` bins, by R
-/// transforms of length L = M/R (R the largest divisor of M with L ≥ lines): output p = Rq + r is
-/// Σ_l b_l e^{2πilr/M} e^{2πilq/L}, the L-point transform of the twisted spectrum. On the paper's
-/// grid (M = 20 480, 2048 lines) ten 2048-point transforms that stay in the cache replace one of
-/// 20 480 whose input is nine-tenths zeros, and the zeros are never written.
-struct PrunedInverse {
-    len: usize,
-    lines: usize,
-    rows: usize,
-    row_len: usize,
-    fft: Arc<dyn Fft<f64>>,
-    /// twists[r·lines + l] = e^{2πi·lr/M}, each from its own exact angle.
-    twists: Vec<Complex<f64>>,
-    scratch: Vec<Complex<f64>>,
-    /// The transform's output, `process`'s return value.
-    output: Vec<Complex<f64>>,
-}
-
-impl PrunedInverse {
-    fn new(len: usize, lines: usize) -> Self {
-        assert!(lines <= len, "more lines than points");
-        let rows = (1..=len / lines).rev().find(|r| len.is_multiple_of(*r)).unwrap_or(1);
-        let row_len = len / rows;
-        let fft = FftPlanner::new().plan_fft_inverse(row_len);
-        let twists = (0..rows)
-            .flat_map(|r| (0..lines).map(move |l| (l * r) % len))
-            .map(|k| Complex::from_polar(1.0, 2.0 * PI * k as f64 / len as f64))
-            .collect();
-        let scratch = vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()];
-        let output = vec![Complex::new(0.0, 0.0); len];
-        PrunedInverse { len, lines, rows, row_len, fft, twists, scratch, output }
-    }
-
-    /// Runs `f` with this thread's transform of the shape.
-    fn with<T>(len: usize, lines: usize, f: impl FnOnce(&mut PrunedInverse) -> T) -> T {
-        TRANSFORMS.with(|cache| {
-            let mut cache = cache.borrow_mut();
-            let index = match cache.iter().position(|t| t.len == len && t.lines == lines) {
-                Some(index) => index,
-                None => {
-                    cache.push(PrunedInverse::new(len, lines));
-                    cache.len() - 1
-                }
-            };
-            f(&mut cache[index])
-        })
-    }
-
-    /// out[r·L + q] = Σ_{l < lines} spectrum[l]·e^{2πi·l(Rq + r)/M}.
-    fn process(&mut self, spectrum: &[Complex<f64>]) -> &[Complex<f64>] {
-        let out = &mut self.output;
-        for (row, twists) in out.chunks_exact_mut(self.row_len).zip(self.twists.chunks_exact(self.lines)) {
-            for ((o, b), t) in row.iter_mut().zip(spectrum).zip(twists) {
-                *o = b * t;
-            }
-            row[self.lines..].fill(Complex::new(0.0, 0.0));
-        }
-        self.fft.process_with_scratch(out, &mut self.scratch);
-        out
-    }
-
-    /// The index in `process`'s output of the transform at point p.
-    fn position(&self, p: usize) -> (usize, usize) {
-        (p % self.rows, p / self.rows)
     }
 }
 
@@ -236,16 +161,16 @@ impl CubicSchedule {
 /// a sine and a cosine per frequency (they were a tenth of a modal storm's cost). The few points
 /// within 10⁻⁶ of the centre are rejected too, which keeps the law rotation-invariant. Every
 /// candidate is written and only the kept ones advance, so the processor has no branch to
-/// mispredict on a coin flip.
-pub(crate) fn unit_phases(rng: &mut Rng, count: usize) -> Vec<Complex<f64>> {
-    let mut phases = vec![Complex::new(0.0, 0.0); count + 1];
+/// mispredict on a coin flip. Drawn in double precision, kept in the transforms' single.
+pub(crate) fn unit_phases(rng: &mut Rng, count: usize) -> Vec<Bin> {
+    let mut phases = vec![Bin::new(0.0, 0.0); count + 1];
     let mut kept = 0;
     while kept < count {
         let x = 2.0 * rng.random::<f64>() - 1.0;
         let y = 2.0 * rng.random::<f64>() - 1.0;
         let r2 = x * x + y * y;
         let scale = r2.sqrt().recip();
-        phases[kept] = Complex::new(x * scale, y * scale);
+        phases[kept] = Bin::new((x * scale) as f32, (y * scale) as f32);
         kept += usize::from(r2 <= 1.0 && r2 > 1e-12);
     }
     phases.truncate(count);
@@ -294,50 +219,27 @@ pub fn simulate_coarse(
     // storm grid of this duration (a grid's last instant lies within half a step, ≤ π/(2ω_up), of it).
     let count = ((duration + PI / grid.cutoff) / dt_g).ceil() as usize + 4;
 
-    let mut coarse = vec![vec![0.0; count]; n];
-    let mut spectrum = vec![Complex::new(0.0, 0.0); lines];
     let mut columns = vec![0.0; n * lines];
-    let mut modulation = vec![Complex::new(0.0, 0.0); count];
+    let mut amplitudes = vec![0.0f32; lines];
     let amplitude = 2.0 * domega.sqrt();
-
-    PrunedInverse::with(fft_len, lines, |transform| {
+    let series = PrunedInverse::with(fft_len, lines, |transform| {
+        let mut sum = PolyphaseSum::new(n, count, transform.rows());
         for m in 0..n {
             let omega0 = (m + 1) as f64 * domega / n as f64;
             // Column m of the Cholesky factor at every ω_ml, line-major: columns[l·n + j].
             csd.factor_columns(omega0, domega, m, &mut columns);
-            // e^{iω₀t} by rotation, anchored exactly every 64 instants (the drift stays at rounding level).
-            let rotation = Complex::from_polar(1.0, omega0 * dt_g);
-            let mut z = Complex::new(1.0, 0.0);
-            for (q, out) in modulation.iter_mut().enumerate() {
-                z = if q % 64 == 0 { Complex::from_polar(1.0, omega0 * (q as f64 - 1.0) * dt_g) } else { z * rotation };
-                *out = z;
-            }
-            let phases = &phases[m * lines..(m + 1) * lines];
+            transform.set_phases(&phases[m * lines..(m + 1) * lines]);
+            sum.set_modulation(omega0 * dt_g);
             for j in m..n {
-                for ((b, phase), column) in spectrum.iter_mut().zip(phases).zip(columns.chunks_exact(n)) {
-                    *b = phase * (amplitude * column[j]);
+                for (a, column) in amplitudes.iter_mut().zip(columns.chunks_exact(n)) {
+                    *a = (amplitude * column[j]) as f32;
                 }
-                // Coarse point q is instant q − 1 of the transform, periodic in fft_len instants:
-                // walk its (row, column) position from the last instant on.
-                let (rows, row_len) = (transform.rows, transform.row_len);
-                let (mut r, mut c) = transform.position(fft_len - 1);
-                let transformed = transform.process(&spectrum);
-                for (out, z) in coarse[j].iter_mut().zip(&modulation) {
-                    let x = transformed[r * row_len + c];
-                    *out += x.re * z.re - x.im * z.im;
-                    r += 1;
-                    if r == rows {
-                        r = 0;
-                        c += 1;
-                        if c == row_len {
-                            c = 0;
-                        }
-                    }
-                }
+                sum.add(j, transform.transform(&amplitudes));
             }
         }
+        sum.into_series()
     });
-    Ok(CoarseSeries { step: dt_g, series: coarse })
+    Ok(CoarseSeries { step: dt_g, series })
 }
 
 /// The smallest length ≥ `n` of the form 2^a 3^b 5^c, on which rustfft is fastest.
@@ -363,6 +265,7 @@ fn fft_friendly(n: usize) -> usize {
 mod tests {
     use super::*;
     use crate::uncertainty::rng_from_seed;
+    use rustfft::num_complex::Complex;
 
     /// A constant 2×2 spectrum S = [[1, ρ],[ρ, 1]]·s₀ on [0, ω_up).
     struct Flat {
@@ -383,7 +286,8 @@ mod tests {
     }
 
     /// Over one full period T̂ the scheme is ergodic: the time averages of v_j² and v₁v₂ equal the
-    /// discretised targets 2 Σ S Δω exactly, up to rounding, for every realization.
+    /// discretised targets 2 Σ S Δω exactly, up to the transforms' single-precision rounding
+    /// (a relative 10⁻⁵ leaves an order of magnitude over it), for every realization.
     #[test]
     fn full_period_moments_are_exact() {
         let grid = SpectralGrid { lines: 64, cutoff: 2.0 * PI };
@@ -398,9 +302,9 @@ mod tests {
         let var0 = mean(&|i| v[0][i] * v[0][i]);
         let var1 = mean(&|i| v[1][i] * v[1][i]);
         let cov = mean(&|i| v[0][i] * v[1][i]);
-        assert!((var0 / target - 1.0).abs() < 1e-10, "{var0} vs {target}");
-        assert!((var1 / target - 1.0).abs() < 1e-10, "{var1} vs {target}");
-        assert!((cov / (0.6 * target) - 1.0).abs() < 1e-10, "{cov}");
+        assert!((var0 / target - 1.0).abs() < 1e-5, "{var0} vs {target}");
+        assert!((var1 / target - 1.0).abs() < 1e-5, "{var1} vs {target}");
+        assert!((cov / (0.6 * target) - 1.0).abs() < 1e-5, "{cov}");
     }
 
     /// Phases lie on the unit circle and are uniform on it: the first four trigonometric moments
@@ -409,8 +313,9 @@ mod tests {
     fn phases_are_uniform_on_the_circle() {
         let mut rng = rng_from_seed(5);
         let n = 200_000;
-        let z = unit_phases(&mut rng, n);
-        assert!(z.iter().all(|z| (z.norm() - 1.0).abs() < 1e-15));
+        let z: Vec<Complex<f64>> =
+            unit_phases(&mut rng, n).iter().map(|z| Complex::new(f64::from(z.re), f64::from(z.im))).collect();
+        assert!(z.iter().all(|z| (z.norm() - 1.0).abs() < 1e-7));
         let bound = 5.0 / (2.0 * n as f64).sqrt();
         for k in 1..=4 {
             let moment = z.iter().map(|z| z.powu(k)).sum::<Complex<f64>>() / n as f64;
@@ -420,7 +325,8 @@ mod tests {
         assert!((first_quadrant - 0.25).abs() < 5.0 * (0.25 * 0.75 / n as f64).sqrt(), "{first_quadrant}");
     }
 
-    /// The FFT evaluation equals the direct double sum of Eq. (15) at arbitrary instants.
+    /// The FFT evaluation equals the direct double sum of Eq. (15) at arbitrary instants, to single
+    /// precision's rounding of the sum of the terms' magnitudes.
     #[test]
     fn fft_equals_direct_summation() {
         let grid = SpectralGrid { lines: 32, cutoff: 2.0 * PI };
@@ -435,14 +341,17 @@ mod tests {
         let dw = grid.step();
         for (i, t) in (0..storm.steps()).map(|i| (i, i as f64 * dt)) {
             for j in 0..2 {
-                let mut sum = 0.0;
+                let (mut sum, mut magnitudes) = (0.0, 0.0);
                 for m in 0..=j {
                     for l in 0..32 {
                         let w = l as f64 * dw + (m + 1) as f64 * dw / 2.0;
-                        sum += 2.0 * h[j][m] * dw.sqrt() * (phases[m * 32 + l] * Complex::from_polar(1.0, w * t)).re;
+                        let phase = phases[m * 32 + l];
+                        let phase = Complex::new(f64::from(phase.re), f64::from(phase.im));
+                        sum += 2.0 * h[j][m] * dw.sqrt() * (phase * Complex::from_polar(1.0, w * t)).re;
+                        magnitudes += 2.0 * f64::abs(h[j][m]) * dw.sqrt();
                     }
                 }
-                assert!((v[j][i] - sum).abs() < 1e-10, "t={t} j={j}: {} vs {sum}", v[j][i]);
+                assert!((v[j][i] - sum).abs() < 1e-6 * magnitudes, "t={t} j={j}: {} vs {sum}", v[j][i]);
             }
         }
     }
