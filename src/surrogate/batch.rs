@@ -20,6 +20,7 @@ use super::narx::{DIVERGENCE_BOUND, NarxTerm, diverged, rest_output};
 use super::simd::{self, Vector};
 use crate::error::{Error, Result};
 use crate::wind::{CoarseModalForces, CoarseSeries, CubicSchedule, ModalForces};
+use std::cell::RefCell;
 
 /// Samples per batch: one AVX-512 register of f64, two AVX2 ones.
 pub const LANES: usize = 8;
@@ -570,54 +571,65 @@ fn power(x: &Lanes, p: u32) -> Lanes {
     }
 }
 
-/// The scaled input deviations of every lane, lane-major so that one interpolation serves all lanes:
-/// `(schedule, inputs)` with inputs[m][q][lane] the value at coarse point q (at t = (q − 1)·dt_g)
-/// and the schedule from the storm's grid onto it. Samples from one generation grid are taken as
-/// they are; any others are filled on the storm's grid and padded, which the same interpolation
-/// then reads exactly (one step per generation step, weights 0, 1, 0, 0).
+thread_local! {
+    /// Each thread's lane-major inputs, reused from batch to batch (a batch's are megabytes, and
+    /// allocating them afresh cost page faults).
+    static LANE_INPUTS: RefCell<Vec<Vec<Lanes>>> = const { RefCell::new(Vec::new()) };
+}
+
+/// The scaled input deviations of every lane, lane-major so that one interpolation serves all
+/// lanes: inputs[m][q][lane] the value at coarse point q (at t = (q − 1)·dt_g), into `inputs`;
+/// returns the schedule from the storm's grid onto the coarse points. Samples from one generation
+/// grid are taken as they are; any others are filled on the storm's grid and padded, which the same
+/// interpolation then reads exactly (one step per generation step, weights 0, 1, 0, 0).
 fn lane_inputs(
     samples: &[BatchSample],
     inverse_scales: &[f64],
     steps: usize,
     time_step: f64,
-) -> (CubicSchedule, Vec<Vec<Lanes>>) {
-    let transpose = |series: &[Vec<f64>], scale: f64| -> Vec<Lanes> {
-        (0..series[0].len())
-            .map(|q| {
-                let mut to = [0.0; LANES];
-                for (t, x) in to.iter_mut().zip(series) {
-                    *t = x[q] * scale;
-                }
-                to
-            })
-            .collect()
+    inputs: &mut Vec<Vec<Lanes>>,
+) -> CubicSchedule {
+    let transpose = |series: &[&[f64]], scale: f64, to: &mut Vec<Lanes>| {
+        to.clear();
+        to.extend((0..series[0].len()).map(|q| {
+            let mut lanes = [0.0; LANES];
+            for (t, x) in lanes.iter_mut().zip(series) {
+                *t = x[q] * scale;
+            }
+            lanes
+        }));
     };
+    inputs.resize_with(inverse_scales.len(), Vec::new);
     let coarse: Option<Vec<&CoarseSeries>> = samples.iter().map(|s| s.forces.coarse()).collect();
     if let Some(all) =
         coarse.filter(|all| all.iter().all(|c| c.step == all[0].step && c.series[0].len() == all[0].series[0].len()))
         && let Some(step) = all.first().map(|c| c.step)
     {
-        let inputs = (0..inverse_scales.len())
-            .map(|m| transpose(&all.iter().map(|c| c.series[m].clone()).collect::<Vec<_>>(), inverse_scales[m]))
-            .collect();
-        return (CubicSchedule::new(step, time_step), inputs);
+        for (m, to) in inputs.iter_mut().enumerate() {
+            transpose(&all.iter().map(|c| c.series[m].as_slice()).collect::<Vec<_>>(), inverse_scales[m], to);
+        }
+        return CubicSchedule::new(step, time_step);
     }
-    let inputs = (0..inverse_scales.len())
-        .map(|m| {
-            let padded: Vec<Vec<f64>> = samples
-                .iter()
-                .map(|sample| {
-                    let mut series = vec![0.0; steps + 3];
-                    sample.forces.fill(m, time_step, 0, &mut series[1..=steps]);
-                    let mean = sample.forces.mean(m);
-                    series[1..=steps].iter_mut().for_each(|f| *f -= mean);
-                    series
-                })
-                .collect();
-            if padded.is_empty() { vec![[0.0; LANES]; steps + 3] } else { transpose(&padded, inverse_scales[m]) }
-        })
-        .collect();
-    (CubicSchedule::new(time_step, time_step), inputs)
+    for (m, to) in inputs.iter_mut().enumerate() {
+        let padded: Vec<Vec<f64>> = samples
+            .iter()
+            .map(|sample| {
+                let mut series = vec![0.0; steps + 3];
+                sample.forces.fill(m, time_step, 0, &mut series[1..=steps]);
+                let mean = sample.forces.mean(m);
+                series[1..=steps].iter_mut().for_each(|f| *f -= mean);
+                series
+            })
+            .collect();
+        let padded: Vec<&[f64]> = padded.iter().map(Vec::as_slice).collect();
+        if padded.is_empty() {
+            to.clear();
+            to.resize(steps + 3, [0.0; LANES]);
+        } else {
+            transpose(&padded, inverse_scales[m], to);
+        }
+    }
+    CubicSchedule::new(time_step, time_step)
 }
 
 /// The recursion itself: the dense models' fused loop when they apply, otherwise a block of steps
@@ -633,9 +645,23 @@ fn recurse<V: Vector>(
     time_step: f64,
     sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
-    let (schedule, coarse) = lane_inputs(samples, &state.inverse_scales, steps, time_step);
+    LANE_INPUTS.with_borrow_mut(|coarse| {
+        let schedule = lane_inputs(samples, &state.inverse_scales, steps, time_step, coarse);
+        recurse_on::<V>(state, &schedule, coarse, steps, sink)
+    })
+}
+
+/// [`recurse`] on the lane-major inputs.
+#[inline(always)]
+fn recurse_on<V: Vector>(
+    state: &State,
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    steps: usize,
+    sink: &mut Sink,
+) -> std::result::Result<(), Divergence> {
     if let Some(dense) = &state.dense {
-        return dense_storm::<V>(dense, &state.rests, &schedule, &coarse, steps, sink);
+        return dense_storm::<V>(dense, &state.rests, schedule, coarse, steps, sink);
     }
     let modes = state.rests.len();
     let h = state.history;

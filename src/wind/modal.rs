@@ -30,13 +30,22 @@ const TABLE_SPEEDS: (f64, f64) = (1.0, 150.0);
 #[derive(Debug, Clone)]
 struct ModalSpectrumTable {
     dim: usize,
+    points: usize,
     log_first: f64,
     log_step: f64,
-    /// L at point k, row-major dim×dim, lower triangle: factors[k·dim² + a·dim + b].
+    /// Entry e = a·dim + b (lower triangle) of L at point k: factors[e·points + k], so that the
+    /// four points an interpolation reads are adjacent.
     factors: Vec<f64>,
-    /// ln k for k = 1 … dim·lines: the scheme's frequencies are ω = kΔω/dim, so a sample finds
-    /// ln ω by an addition instead of a logarithm per line (they were a fifth of the look-up).
-    line_logs: Vec<f64>,
+    /// ln k / log_step for k = 1 … dim·lines: the scheme's frequencies are ω = kΔω/dim, so a
+    /// sample finds a line's place in the table by an addition instead of a logarithm.
+    line_positions: Vec<f64>,
+}
+
+/// Where a frequency falls in the table: its first of four points and their Lagrange weights.
+#[derive(Debug, Clone, Copy, Default)]
+struct Stencil {
+    first: usize,
+    weights: [f64; 4],
 }
 
 impl ModalSpectrumTable {
@@ -49,38 +58,45 @@ impl ModalSpectrumTable {
         let log_first = lowest.ln() - 2.0 * log_step;
         let points = ((highest.ln() - log_first) / log_step).ceil() as usize + 3;
         let mut factors = vec![0.0; points * dim * dim];
-        for (k, chunk) in factors.chunks_exact_mut(dim * dim).enumerate() {
+        let mut factor = vec![0.0; dim * dim];
+        for k in 0..points {
             let u = (log_first + k as f64 * log_step).exp();
-            unit.sweep(u, 0.0, 1, &mut |_, s| chunk.copy_from_slice(s));
-            cholesky_through_column(chunk, dim, dim - 1);
+            unit.sweep(u, 0.0, 1, &mut |_, s| factor.copy_from_slice(s));
+            cholesky_through_column(&mut factor, dim, dim - 1);
+            for (e, value) in factor.iter().enumerate() {
+                factors[e * points + k] = *value;
+            }
         }
-        let line_logs = (1..=dim * grid.lines).map(|k| (k as f64).ln()).collect();
-        ModalSpectrumTable { dim, log_first, log_step, factors, line_logs }
+        let line_positions = (1..=dim * grid.lines).map(|k| (k as f64).ln() / log_step).collect();
+        ModalSpectrumTable { dim, points, log_first, log_step, factors, line_positions }
     }
 
-    /// The first table point and the four Lagrange weights (in ln u) of reduced frequency u, given ln u.
+    /// The stencil of the frequency at `position` = (ln u − log_first)/log_step.
     #[inline]
-    fn stencil(&self, log_u: f64) -> (usize, [f64; 4]) {
-        let points = self.factors.len() / (self.dim * self.dim);
-        let x = (log_u - self.log_first) / self.log_step;
-        // The cast truncates and saturates below zero, which is the floor wherever the clamp keeps it.
-        let i = (x as usize).clamp(1, points - 3);
-        let t = x - i as f64;
+    fn stencil(&self, position: f64) -> Stencil {
+        // Within the table the floor; outside it the end intervals extrapolate.
+        let i = position.floor().clamp(1.0, (self.points - 3) as f64);
+        let t = position - i;
         let weights = [
             -t * (t - 1.0) * (t - 2.0) / 6.0,
             (t + 1.0) * (t - 1.0) * (t - 2.0) / 2.0,
             -(t + 1.0) * t * (t - 2.0) / 2.0,
             (t + 1.0) * t * (t - 1.0) / 6.0,
         ];
-        (i - 1, weights)
+        Stencil { first: i as usize - 1, weights }
     }
 
-    /// Entry e (a·dim + b) of L(u), from `stencil(u)`.
+    /// The table position of reduced frequency u.
+    fn position(&self, u: f64) -> f64 {
+        (u.ln() - self.log_first) / self.log_step
+    }
+
+    /// Entry e (a·dim + b) of L at a stencil.
     #[inline]
-    fn entry(&self, (first, w): (usize, [f64; 4]), e: usize) -> f64 {
-        let n2 = self.dim * self.dim;
-        let at = |r: usize| self.factors[(first + r) * n2 + e];
-        w[0] * at(0) + w[1] * at(1) + w[2] * at(2) + w[3] * at(3)
+    fn entry(&self, e: usize, stencil: &Stencil) -> f64 {
+        let at = &self.factors[e * self.points + stencil.first..][..4];
+        let w = &stencil.weights;
+        w[0] * at[0] + w[1] * at[1] + w[2] * at[2] + w[3] * at[3]
     }
 }
 
@@ -88,6 +104,27 @@ impl ModalSpectrumTable {
 struct ScaledSpectrum<'a> {
     table: &'a ModalSpectrumTable,
     speed: f64,
+}
+
+impl ScaledSpectrum<'_> {
+    /// The stencils of ω_l = ω₀ + l·Δω, l < count. On the scheme's grid ω_l = (k₀ + l·n)·Δω/n with
+    /// k₀ whole and ln u = ln k + ln(Δω/(n v̄)), read from the table of ln k.
+    fn stencils(&self, omega0: f64, domega: f64, count: usize) -> Vec<Stencil> {
+        let table = self.table;
+        let n = table.dim;
+        let first = omega0 * n as f64 / domega;
+        let k0 = first.round() as usize;
+        let on_grid = k0 >= 1
+            && (first - k0 as f64).abs() <= 1e-9 * first
+            && k0 + (count.max(1) - 1) * n <= table.line_positions.len();
+        let positions: Vec<f64> = if on_grid {
+            let shift = table.position(domega / (n as f64 * self.speed));
+            (0..count).map(|l| table.line_positions[k0 - 1 + l * n] + shift).collect()
+        } else {
+            (0..count).map(|l| table.position((omega0 + l as f64 * domega) / self.speed)).collect()
+        };
+        positions.iter().map(|x| table.stencil(*x)).collect()
+    }
 }
 
 impl CrossSpectralDensity for ScaledSpectrum<'_> {
@@ -100,10 +137,9 @@ impl CrossSpectralDensity for ScaledSpectrum<'_> {
         let n = self.table.dim;
         let cube = self.speed.powi(3);
         let (mut factor, mut s) = (vec![0.0; n * n], vec![0.0; n * n]);
-        for l in 0..count {
-            let stencil = self.table.stencil(((omega0 + l as f64 * domega) / self.speed).ln());
+        for (l, stencil) in self.stencils(omega0, domega, count).iter().enumerate() {
             for (e, f) in factor.iter_mut().enumerate() {
-                *f = if e % n <= e / n { self.table.entry(stencil, e) } else { 0.0 };
+                *f = if e % n <= e / n { self.table.entry(e, stencil) } else { 0.0 };
             }
             for a in 0..n {
                 for b in 0..=a {
@@ -118,22 +154,10 @@ impl CrossSpectralDensity for ScaledSpectrum<'_> {
         let n = self.table.dim;
         let scale = self.speed.powf(1.5);
         let lines = columns.len() / n;
-        // On the scheme's grid ω_l = (k₀ + l·n)·Δω/n with k₀ whole, and ln u = ln k + ln(Δω/(n v̄)).
-        let first = omega0 * n as f64 / domega;
-        let k0 = first.round() as usize;
-        let on_grid = k0 >= 1
-            && (first - k0 as f64).abs() <= 1e-9 * first
-            && k0 + (lines.max(1) - 1) * n <= self.table.line_logs.len();
-        let offset = (domega / (n as f64 * self.speed)).ln();
-        for (l, column) in columns.chunks_exact_mut(n).enumerate() {
-            let log_u = if on_grid {
-                self.table.line_logs[k0 - 1 + l * n] + offset
-            } else {
-                ((omega0 + l as f64 * domega) / self.speed).ln()
-            };
-            let stencil = self.table.stencil(log_u);
-            for (j, c) in column.iter_mut().enumerate().skip(m) {
-                *c = scale * self.table.entry(stencil, j * n + m);
+        let stencils = self.stencils(omega0, domega, lines);
+        for (j, column) in columns.chunks_exact_mut(lines).enumerate().skip(m) {
+            for (c, stencil) in column.iter_mut().zip(&stencils) {
+                *c = scale * self.table.entry(j * n + m, stencil);
             }
         }
     }
@@ -278,9 +302,11 @@ mod tests {
                 let (mut plain, mut table) = (vec![0.0; lines * 3], vec![0.0; lines * 3]);
                 Plain(&scaled).factor_columns(omega0(m), domega, m, &mut plain);
                 scaled.factor_columns(omega0(m), domega, m, &mut table);
-                for (a, b) in plain.chunks_exact(3).zip(table.chunks_exact(3)) {
-                    for (x, y) in a[m..].iter().zip(&b[m..]) {
-                        assert!((x - y).abs() <= 1e-9 * b[m].abs(), "column {m}: {a:?} vs {b:?}");
+                let diagonal = &table[m * lines..(m + 1) * lines];
+                for j in m..3 {
+                    let (a, b) = (&plain[j * lines..(j + 1) * lines], &table[j * lines..(j + 1) * lines]);
+                    for ((x, y), d) in a.iter().zip(b).zip(diagonal) {
+                        assert!((x - y).abs() <= 1e-9 * d.abs(), "column {m}, row {j}: {x} vs {y}");
                     }
                 }
             }

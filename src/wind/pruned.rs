@@ -24,8 +24,35 @@ use std::sync::Arc;
 pub(super) type Bin = Complex<f32>;
 
 thread_local! {
-    /// Transforms (plans, twiddle factors, buffers) are built once per shape and thread, not per storm.
-    static TRANSFORMS: RefCell<Vec<PrunedInverse>> = const { RefCell::new(Vec::new()) };
+    /// Transforms (plans, twiddle factors, buffers) and sums are built once per shape and thread,
+    /// not per storm: a storm's buffers are megabytes, and allocating them afresh cost page faults.
+    static WORKSPACES: RefCell<Vec<(PrunedInverse, PolyphaseSum)>> = const { RefCell::new(Vec::new()) };
+}
+
+/// Runs `f` with this thread's transform of the shape (M, lines) and a sum of `components`
+/// series of `count` points, zeroed, that its rows add to.
+pub(super) fn with_workspace<T>(
+    len: usize,
+    lines: usize,
+    components: usize,
+    count: usize,
+    f: impl FnOnce(&mut PrunedInverse, &mut PolyphaseSum) -> T,
+) -> T {
+    WORKSPACES.with(|cache| {
+        let mut cache = cache.borrow_mut();
+        let index = match cache.iter().position(|(t, _)| t.len == len && t.lines == lines) {
+            Some(index) => index,
+            None => {
+                let transform = PrunedInverse::new(len, lines);
+                let sum = PolyphaseSum::new(transform.rows);
+                cache.push((transform, sum));
+                cache.len() - 1
+            }
+        };
+        let (transform, sum) = &mut cache[index];
+        sum.reset(components, count);
+        f(transform, sum)
+    })
 }
 
 /// The pruned inverse transform of one shape (M, lines), with its buffers.
@@ -71,26 +98,6 @@ impl PrunedInverse {
         }
     }
 
-    /// Runs `f` with this thread's transform of the shape.
-    pub fn with<T>(len: usize, lines: usize, f: impl FnOnce(&mut PrunedInverse) -> T) -> T {
-        TRANSFORMS.with(|cache| {
-            let mut cache = cache.borrow_mut();
-            let index = match cache.iter().position(|t| t.len == len && t.lines == lines) {
-                Some(index) => index,
-                None => {
-                    cache.push(PrunedInverse::new(len, lines));
-                    cache.len() - 1
-                }
-            };
-            f(&mut cache[index])
-        })
-    }
-
-    /// R, the number of rows.
-    pub fn rows(&self) -> usize {
-        self.rows
-    }
-
     /// Sets the phases of the spectra that follow: line l's is `phases[l]`.
     pub fn set_phases(&mut self, phases: &[Bin]) {
         for (twisted, twists) in self.twisted.chunks_exact_mut(self.lines).zip(self.twists.chunks_exact(self.lines)) {
@@ -127,16 +134,19 @@ pub(super) struct PolyphaseSum {
 }
 
 impl PolyphaseSum {
-    /// `components` series of `count` points for a transform of `rows` rows.
-    pub fn new(components: usize, count: usize, rows: usize) -> Self {
-        let per_row = count.div_ceil(rows);
-        PolyphaseSum {
-            count,
-            rows,
-            per_row,
-            values: vec![0.0; components * rows * per_row],
-            modulation: vec![Bin::new(0.0, 0.0); rows * per_row],
-        }
+    /// An empty sum for a transform of `rows` rows.
+    fn new(rows: usize) -> Self {
+        PolyphaseSum { count: 0, rows, per_row: 0, values: Vec::new(), modulation: Vec::new() }
+    }
+
+    /// Zero sums of `components` series of `count` points, in the buffers already held.
+    fn reset(&mut self, components: usize, count: usize) {
+        self.count = count;
+        self.per_row = count.div_ceil(self.rows);
+        let block = self.rows * self.per_row;
+        self.values.clear();
+        self.values.resize(components * block, 0.0);
+        self.modulation.resize(block, Bin::new(0.0, 0.0));
     }
 
     /// Sets the modulation of the terms that follow to e^{iω(q − 1)Δt}, given `angle` = ωΔt: each
@@ -180,11 +190,19 @@ impl PolyphaseSum {
     }
 
     /// Every component's points in time order.
-    pub fn into_series(self) -> Vec<Vec<f64>> {
+    pub fn series(&self) -> Vec<Vec<f64>> {
         let block = self.rows * self.per_row;
         self.values
             .chunks_exact(block)
-            .map(|values| (0..self.count).map(|q| values[(q % self.rows) * self.per_row + q / self.rows]).collect())
+            .map(|values| {
+                let mut series = vec![0.0; self.count];
+                for (c, points) in series.chunks_mut(self.rows).enumerate() {
+                    for (r, point) in points.iter_mut().enumerate() {
+                        *point = values[r * self.per_row + c];
+                    }
+                }
+                series
+            })
             .collect()
     }
 }
@@ -202,14 +220,13 @@ mod tests {
         let phases: Vec<Bin> = (0..lines).map(|l| Bin::from_polar(1.0, 0.7 * l as f32 + 0.3)).collect();
         let amplitudes: Vec<f32> = (0..lines).map(|l| 1.0 / (1.0 + l as f32)).collect();
         let angle = 0.013;
-        let mut sum = PolyphaseSum::new(1, count, 5);
-        sum.set_modulation(angle);
-        PrunedInverse::with(len, lines, |transform| {
-            assert_eq!(transform.rows(), 5);
+        let series = with_workspace(len, lines, 1, count, |transform, sum| {
+            assert_eq!(transform.rows, 5);
             transform.set_phases(&phases);
+            sum.set_modulation(angle);
             sum.add(0, transform.transform(&amplitudes));
+            sum.series().remove(0)
         });
-        let series = sum.into_series().remove(0);
         let scale: f64 = amplitudes.iter().map(|a| f64::from(*a)).sum();
         for (q, value) in series.iter().enumerate() {
             let p = q as f64 - 1.0;

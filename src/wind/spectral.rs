@@ -8,7 +8,7 @@
 //! process is T̂ = 2πn/Δω.
 
 use super::StormGrid;
-use super::pruned::{Bin, PolyphaseSum, PrunedInverse};
+use super::pruned::{Bin, with_workspace};
 use crate::error::{Error, Result};
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
@@ -22,18 +22,19 @@ pub trait CrossSpectralDensity {
     /// row-major n×n; at least its lower triangle is filled.
     fn sweep(&self, omega0: f64, domega: f64, count: usize, visit: &mut dyn FnMut(usize, &[f64]));
 
-    /// Column m of the lower Cholesky factor of the CSD at ω_l = ω₀ + l·Δω into `columns[l·n + j]`,
-    /// j ≥ m, for every line l < columns.len() / n (entries above m are left as they are). By
-    /// default the CSD of every frequency is factored through column m; a spectrum that knows its
-    /// factor gives it directly.
+    /// Column m of the lower Cholesky factor of the CSD at ω_l = ω₀ + l·Δω into
+    /// `columns[j·lines + l]`, j ≥ m, for every line l < lines = columns.len() / n (rows above m are
+    /// left as they are). By default the CSD of every frequency is factored through column m; a
+    /// spectrum that knows its factor gives it directly.
     fn factor_columns(&self, omega0: f64, domega: f64, m: usize, columns: &mut [f64]) {
         let n = self.dim();
+        let lines = columns.len() / n;
         let mut factor = vec![0.0; n * n];
-        self.sweep(omega0, domega, columns.len() / n, &mut |l, s| {
+        self.sweep(omega0, domega, lines, &mut |l, s| {
             factor.copy_from_slice(s);
             cholesky_through_column(&mut factor, n, m);
             for j in m..n {
-                columns[l * n + j] = factor[j * n + m];
+                columns[j * lines + l] = factor[j * n + m];
             }
         });
     }
@@ -222,22 +223,21 @@ pub fn simulate_coarse(
     let mut columns = vec![0.0; n * lines];
     let mut amplitudes = vec![0.0f32; lines];
     let amplitude = 2.0 * domega.sqrt();
-    let series = PrunedInverse::with(fft_len, lines, |transform| {
-        let mut sum = PolyphaseSum::new(n, count, transform.rows());
+    let series = with_workspace(fft_len, lines, n, count, |transform, sum| {
         for m in 0..n {
             let omega0 = (m + 1) as f64 * domega / n as f64;
-            // Column m of the Cholesky factor at every ω_ml, line-major: columns[l·n + j].
+            // Column m of the Cholesky factor at every ω_ml: columns[j·lines + l].
             csd.factor_columns(omega0, domega, m, &mut columns);
             transform.set_phases(&phases[m * lines..(m + 1) * lines]);
             sum.set_modulation(omega0 * dt_g);
-            for j in m..n {
-                for (a, column) in amplitudes.iter_mut().zip(columns.chunks_exact(n)) {
-                    *a = (amplitude * column[j]) as f32;
+            for (j, column) in columns.chunks_exact(lines).enumerate().skip(m) {
+                for (a, h) in amplitudes.iter_mut().zip(column) {
+                    *a = (amplitude * h) as f32;
                 }
                 sum.add(j, transform.transform(&amplitudes));
             }
         }
-        sum.into_series()
+        sum.series()
     });
     Ok(CoarseSeries { step: dt_g, series })
 }
