@@ -131,12 +131,14 @@ pub(super) struct PolyphaseSum {
     values: Vec<f64>,
     /// The current modulation e^{iω₀(q − 1)Δt}, laid out as one component's values.
     modulation: Vec<Bin>,
+    /// e^{iω₀RcΔt}, c < C: how far every row of the modulation turns by its point c.
+    advance: Vec<Complex<f64>>,
 }
 
 impl PolyphaseSum {
     /// An empty sum for a transform of `rows` rows.
     fn new(rows: usize) -> Self {
-        PolyphaseSum { count: 0, rows, per_row: 0, values: Vec::new(), modulation: Vec::new() }
+        PolyphaseSum { count: 0, rows, per_row: 0, values: Vec::new(), modulation: Vec::new(), advance: Vec::new() }
     }
 
     /// Zero sums of `components` series of `count` points, in the buffers already held.
@@ -149,15 +151,23 @@ impl PolyphaseSum {
         self.modulation.resize(block, Bin::new(0.0, 0.0));
     }
 
-    /// Sets the modulation of the terms that follow to e^{iω(q − 1)Δt}, given `angle` = ωΔt: each
-    /// row by rotation, anchored exactly every 64 points (the drift stays at rounding level).
+    /// Sets the modulation of the terms that follow to e^{iω(q − 1)Δt}, given `angle` = ωΔt. Row r
+    /// is its first value times the advance e^{iωRcΔt} common to every row, which is formed once
+    /// by rotation, anchored exactly every 64 points (the drift stays at rounding level); the rows
+    /// are then independent products instead of one long chain of rotations.
     pub fn set_modulation(&mut self, angle: f64) {
-        let rotation = Complex::from_polar(1.0, angle * self.rows as f64);
+        let stride = angle * self.rows as f64;
+        let rotation = Complex::from_polar(1.0, stride);
+        let mut z = Complex::new(1.0, 0.0);
+        self.advance.clear();
+        self.advance.extend((0..self.per_row).map(|c| {
+            z = if c % 64 == 0 { Complex::from_polar(1.0, stride * c as f64) } else { z * rotation };
+            z
+        }));
         for (r, row) in self.modulation.chunks_exact_mut(self.per_row).enumerate() {
-            let mut z = Complex::new(1.0, 0.0);
-            for (c, out) in row.iter_mut().enumerate() {
-                let instant = (self.rows * c + r) as f64 - 1.0;
-                z = if c % 64 == 0 { Complex::from_polar(1.0, angle * instant) } else { z * rotation };
+            let first = Complex::from_polar(1.0, angle * (r as f64 - 1.0));
+            for (out, advance) in row.iter_mut().zip(&self.advance) {
+                let z = first * advance;
                 *out = Bin::new(z.re as f32, z.im as f32);
             }
         }

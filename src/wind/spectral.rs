@@ -162,20 +162,25 @@ impl CubicSchedule {
 /// a sine and a cosine per frequency (they were a tenth of a modal storm's cost). The few points
 /// within 10⁻⁶ of the centre are rejected too, which keeps the law rotation-invariant. Every
 /// candidate is written and only the kept ones advance, so the processor has no branch to
-/// mispredict on a coin flip. Drawn in double precision, kept in the transforms' single.
+/// mispredict on a coin flip; the kept points are projected afterwards in one pass the compiler
+/// vectorises. Drawn in double precision, kept in the transforms' single.
 pub(crate) fn unit_phases(rng: &mut Rng, count: usize) -> Vec<Bin> {
-    let mut phases = vec![Bin::new(0.0, 0.0); count + 1];
+    let mut points = vec![[0.0f64; 2]; count + 1];
     let mut kept = 0;
     while kept < count {
         let x = 2.0 * rng.random::<f64>() - 1.0;
         let y = 2.0 * rng.random::<f64>() - 1.0;
         let r2 = x * x + y * y;
-        let scale = r2.sqrt().recip();
-        phases[kept] = Bin::new((x * scale) as f32, (y * scale) as f32);
+        points[kept] = [x, y];
         kept += usize::from(r2 <= 1.0 && r2 > 1e-12);
     }
-    phases.truncate(count);
-    phases
+    points[..count]
+        .iter()
+        .map(|[x, y]| {
+            let scale = (x * x + y * y).sqrt().recip();
+            Bin::new((x * scale) as f32, (y * scale) as f32)
+        })
+        .collect()
 }
 
 /// Simulates one realization of the process on `storm`'s time grid, generated every
