@@ -342,9 +342,10 @@ mod tests {
         let wind = ModalWind::new(&p.wind, p.modes.shapes.as_ref());
         let scaled = ScaledSpectrum { table: &wind.table, speed: 33.0 };
         let scheme = p.wind.grid().step();
-        let grids: [(&dyn Fn(usize) -> f64, f64, usize); 2] =
-            [(&|_| 0.001, 0.0173, 300), (&|m| (m + 1) as f64 * scheme / 3.0, scheme, p.wind.site.frequencies)];
-        for (omega0, domega, lines) in grids {
+        // (ω₀ of column m = first + (m + 1)·shift, Δω, lines)
+        let grids = [(0.001, 0.0, 0.0173, 300), (0.0, scheme / 3.0, scheme, p.wind.site.frequencies)];
+        for (first, shift, domega, lines) in grids {
+            let omega0 = |m: usize| first + (m + 1) as f64 * shift;
             for m in 0..3 {
                 let (mut plain, mut table) = (vec![0.0; lines * 3], vec![0.0; lines * 3]);
                 Plain(&scaled).factor_columns(omega0(m), domega, m, &mut plain);

@@ -5,7 +5,8 @@
 //! ω_ml = lΔω + (m+1)Δω/n and H(ω) the lower Cholesky factor of S(ω). Because the coherence is real,
 //! H is real and the phase angles θ_jm reduce to its signs. For each (j, m) the sum over l is one
 //! inverse FFT, h_jm(p) = Σ_l B_jm(l) e^{2πilp/M}, modulated by e^{i(m+1)Δω t/n}; the period of the
-//! process is T̂ = 2πn/Δω.
+//! process is T̂ = 2πn/Δω. The transforms, pruned and in single precision, and the sums of their
+//! modulated rows are in [`super::pruned`].
 
 use super::StormGrid;
 use super::pruned::{Bin, with_workspace};
