@@ -13,7 +13,7 @@
 //! decides convergence is exact.
 
 use crate::error::{Error, Result};
-use crate::linalg::{cholesky, cholesky_solve};
+use crate::linalg::{cholesky, cholesky_solve, dot};
 use crate::structure::Structure;
 use faer::MatRef;
 
@@ -184,8 +184,12 @@ impl ImplicitDamperSolve {
             (self.velocities, self.powers) = (velocities, powers);
             self.current = true;
         }
-        for i in 0..n {
-            self.gradient[i] = (0..n).map(|j| self.w_inverse[i * n + j] * (s[j] - a[j])).sum();
+        // s − a into `step`, free until the next model step overwrites it.
+        for ((d, x), y) in self.step.iter_mut().zip(s).zip(a) {
+            *d = x - y;
+        }
+        for (g, row) in self.gradient.iter_mut().zip(self.w_inverse.chunks_exact(n)) {
+            *g = dot(row, &self.step);
         }
         self.hessian.copy_from_slice(&self.w_inverse);
         for (d, row) in self.map.iter().enumerate() {
