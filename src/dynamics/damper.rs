@@ -120,6 +120,8 @@ pub struct ImplicitDamperSolve {
     trial_powers: Vec<f64>,
     /// Whether `velocities` and `powers` belong to the current iterate.
     current: bool,
+    /// Work space for s − a in the objective.
+    difference: Vec<f64>,
 }
 
 impl ImplicitDamperSolve {
@@ -140,6 +142,7 @@ impl ImplicitDamperSolve {
             trial_velocities: vec![0.0; dampers.len()],
             trial_powers: vec![0.0; dampers.len()],
             current: false,
+            difference: vec![0.0; size],
         }
     }
 
@@ -157,15 +160,15 @@ impl ImplicitDamperSolve {
         }
     }
 
-    /// J(s), given the damper velocities of s and their powers |v|^α (|v|^{1+α} = |v|·|v|^α).
-    fn objective(&self, s: &[f64], a: &[f64], velocities: &[f64], powers: &[f64]) -> f64 {
-        let n = self.size;
-        let mut quadratic = 0.0;
-        for i in 0..n {
-            let di = s[i] - a[i];
-            let row: f64 = (0..n).map(|j| self.w_inverse[i * n + j] * (s[j] - a[j])).sum();
-            quadratic += di * row;
+    /// J(s), given the damper velocities of s and their powers |v|^α (|v|^{1+α} = |v|·|v|^α);
+    /// `difference` is work space.
+    fn objective(&self, s: &[f64], a: &[f64], velocities: &[f64], powers: &[f64], difference: &mut [f64]) -> f64 {
+        for ((d, x), y) in difference.iter_mut().zip(s).zip(a) {
+            *d = x - y;
         }
+        let difference = &*difference;
+        let quadratic: f64 =
+            self.w_inverse.chunks_exact(self.size).zip(difference).map(|(row, d)| d * dot(row, difference)).sum();
         let p = 1.0 + self.exponent;
         let dissipation: f64 =
             velocities.iter().zip(powers).zip(&self.coefficients).map(|((v, pw), c)| c / p * v.abs() * pw).sum();
@@ -256,14 +259,15 @@ impl ImplicitDamperSolve {
                 (self.velocities, self.powers) = (velocities, powers);
                 return Ok(iteration + 1);
             }
-            let current = self.objective(s, a, &self.velocities, &self.powers);
+            let mut difference = std::mem::take(&mut self.difference);
+            let current = self.objective(s, a, &self.velocities, &self.powers, &mut difference);
             let slope: f64 = self.gradient.iter().zip(&self.step).map(|(g, d)| g * d).sum();
             self.take_trial_step(s);
             let (mut velocities, mut powers) =
                 (std::mem::take(&mut self.trial_velocities), std::mem::take(&mut self.trial_powers));
             self.evaluate(&self.trial, &mut velocities, &mut powers);
-            let value = self.objective(&self.trial, a, &velocities, &powers);
-            (self.trial_velocities, self.trial_powers) = (velocities, powers);
+            let value = self.objective(&self.trial, a, &velocities, &powers, &mut difference);
+            (self.trial_velocities, self.trial_powers, self.difference) = (velocities, powers, difference);
             if value <= current + 1e-4 * slope {
                 // The trial is the next iterate: its velocities and powers are already known.
                 std::mem::swap(&mut self.velocities, &mut self.trial_velocities);
