@@ -97,6 +97,13 @@ impl Dampers {
     }
 }
 
+/// out = x − y.
+fn subtract_into(out: &mut [f64], x: &[f64], y: &[f64]) {
+    for ((d, x), y) in out.iter_mut().zip(x).zip(y) {
+        *d = x - y;
+    }
+}
+
 /// Newton solver for s = a − W Gᵀ F(G s) with preallocated work space, reused every step.
 #[derive(Debug, Clone)]
 pub struct ImplicitDamperSolve {
@@ -120,7 +127,7 @@ pub struct ImplicitDamperSolve {
     trial_powers: Vec<f64>,
     /// Whether `velocities` and `powers` belong to the current iterate.
     current: bool,
-    /// Work space for s − a in the objective.
+    /// Work space for s − a.
     difference: Vec<f64>,
 }
 
@@ -163,9 +170,7 @@ impl ImplicitDamperSolve {
     /// J(s), given the damper velocities of s and their powers |v|^α (|v|^{1+α} = |v|·|v|^α);
     /// `difference` is work space.
     fn objective(&self, s: &[f64], a: &[f64], velocities: &[f64], powers: &[f64], difference: &mut [f64]) -> f64 {
-        for ((d, x), y) in difference.iter_mut().zip(s).zip(a) {
-            *d = x - y;
-        }
+        subtract_into(difference, s, a);
         let difference = &*difference;
         let quadratic: f64 =
             self.w_inverse.chunks_exact(self.size).zip(difference).map(|(row, d)| d * dot(row, difference)).sum();
@@ -187,12 +192,9 @@ impl ImplicitDamperSolve {
             (self.velocities, self.powers) = (velocities, powers);
             self.current = true;
         }
-        // s − a into `step`, free until the next model step overwrites it.
-        for ((d, x), y) in self.step.iter_mut().zip(s).zip(a) {
-            *d = x - y;
-        }
+        subtract_into(&mut self.difference, s, a);
         for (g, row) in self.gradient.iter_mut().zip(self.w_inverse.chunks_exact(n)) {
-            *g = dot(row, &self.step);
+            *g = dot(row, &self.difference);
         }
         self.hessian.copy_from_slice(&self.w_inverse);
         for (d, row) in self.map.iter().enumerate() {

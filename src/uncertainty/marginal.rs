@@ -222,7 +222,7 @@ impl Marginal {
 /// Shape k and scale s of a Fréchet law with location 0 and the given mean and standard deviation:
 /// mean = s Γ(1 − 1/k), var = s² (Γ(1 − 2/k) − Γ(1 − 1/k)²). The coefficient of variation falls
 /// monotonically in k, so bisection on k finds it, down to adjacent floating-point numbers (about
-/// 50 halvings; it runs for every sample drawn, so it stops there).
+/// 60 halvings; it runs for every sample drawn, so it stops there).
 pub fn frechet_parameters(mean: f64, sd: f64) -> (f64, f64) {
     let cov2 = (sd / mean).powi(2);
     let cov2_of = |k: f64| {

@@ -117,13 +117,15 @@ impl ScaledSpectrum<'_> {
         let on_grid = k0 >= 1
             && (first - k0 as f64).abs() <= 1e-9 * first
             && k0 + (count.max(1) - 1) * n <= table.line_positions.len();
-        let positions: Vec<f64> = if on_grid {
-            let shift = table.position(domega / (n as f64 * self.speed));
-            (0..count).map(|l| table.line_positions[k0 - 1 + l * n] + shift).collect()
-        } else {
-            (0..count).map(|l| table.position((omega0 + l as f64 * domega) / self.speed)).collect()
+        let shift = table.position(domega / (n as f64 * self.speed));
+        let position = |l: usize| -> f64 {
+            if on_grid {
+                table.line_positions[k0 - 1 + l * n] + shift
+            } else {
+                table.position((omega0 + l as f64 * domega) / self.speed)
+            }
         };
-        positions.iter().map(|x| table.stencil(*x)).collect()
+        (0..count).map(|l| table.stencil(position(l))).collect()
     }
 }
 
