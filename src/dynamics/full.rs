@@ -7,7 +7,7 @@
 
 use super::damper::{Dampers, ImplicitDamperSolve};
 use crate::error::{Error, Result};
-use crate::linalg::{cholesky, cholesky_solve};
+use crate::linalg::{cholesky, cholesky_solve, multiply_into};
 use crate::structure::{Modes, Structure};
 use crate::wind::FloorForces;
 
@@ -53,12 +53,6 @@ impl FullSystem {
             }
         }
         FullSystem { size: n, mass, damping, stiffness }
-    }
-
-    fn apply(matrix: &[f64], n: usize, x: &[f64], out: &mut [f64]) {
-        for i in 0..n {
-            out[i] = (0..n).map(|j| matrix[i * n + j] * x[j]).sum();
-        }
     }
 }
 
@@ -111,11 +105,11 @@ pub fn integrate_full(
         for j in 0..n {
             work[j] = 2.0 / dt * v[j] + acc[j];
         }
-        FullSystem::apply(&system.mass, n, &work, &mut rhs);
+        multiply_into(&mut rhs, &system.mass, &work);
         for j in 0..n {
             work[j] = u[j] + 0.5 * dt * v[j];
         }
-        FullSystem::apply(&system.stiffness, n, &work, &mut predicted);
+        multiply_into(&mut predicted, &system.stiffness, &work);
         for j in 0..n {
             rhs[j] += forces.series[j][i] - predicted[j];
         }

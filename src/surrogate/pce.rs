@@ -8,7 +8,7 @@
 
 use super::lars::lars_path;
 use crate::error::{Error, Result};
-use crate::linalg::{cholesky, cholesky_solve};
+use crate::linalg::{cholesky, cholesky_solve, forward_substitute};
 use crate::uncertainty::{InputModel, StandardSpace};
 use serde::{Deserialize, Serialize};
 
@@ -318,7 +318,7 @@ fn least_squares_loo(psi: &[f64], p: usize, selected: &[usize], y: &[f64], varia
     }
     let mut beta: Vec<f64> = selected.iter().map(|&c| (0..n).map(|r| psi[r * p + c] * y[r]).sum()).collect();
     cholesky_solve(&g, k, &mut beta);
-    // Leverages h_r = ψ_rᵀ G⁻¹ ψ_r = |L⁻¹ψ_r|², trace of G⁻¹ = Σ_j |L⁻¹ e_j|².
+    // Leverages h_r = ψ_rᵀ G⁻¹ ψ_r = |U⁻ᵀψ_r|², trace of G⁻¹ = Σ_j |U⁻ᵀ e_j|² (G = UᵀU).
     let mut loo = 0.0;
     let mut z = vec![0.0; k];
     for r in 0..n {
@@ -339,14 +339,6 @@ fn least_squares_loo(psi: &[f64], p: usize, selected: &[usize], y: &[f64], varia
     }
     let correction = n as f64 / (n - k) as f64 * (1.0 + trace);
     Some((correction * loo / n as f64 / variance, beta))
-}
-
-/// Solves L z = b in place for the lower factor L of [`cholesky`].
-fn forward_substitute(l: &[f64], k: usize, z: &mut [f64]) {
-    for i in 0..k {
-        let s: f64 = (0..i).map(|j| l[i * k + j] * z[j]).sum();
-        z[i] = (z[i] - s) / l[i * k + i];
-    }
 }
 
 #[cfg(test)]
