@@ -547,18 +547,23 @@ fn dispatch(
     time_step: f64,
     sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the processor has the features the function is compiled for.
-            return unsafe { recurse_avx512(state, samples, steps, time_step, sink) };
+    // The buffer is borrowed here, outside the functions compiled for an instruction set: code in a
+    // closure called through the thread-local's accessor is not compiled for it, and there the
+    // AVX-512 intrinsics become function calls (a tenfold slower free run, measured).
+    LANE_INPUTS.with_borrow_mut(|coarse| {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") && std::arch::is_x86_feature_detected!("fma") {
+                // SAFETY: the processor has the features the function is compiled for.
+                return unsafe { recurse_avx512(state, samples, steps, time_step, coarse, sink) };
+            }
+            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
+                // SAFETY: as above.
+                return unsafe { recurse_avx2(state, samples, steps, time_step, coarse, sink) };
+            }
         }
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: as above.
-            return unsafe { recurse_avx2(state, samples, steps, time_step, sink) };
-        }
-    }
-    recurse::<Lanes>(state, samples, steps, time_step, sink)
+        recurse::<Lanes>(state, samples, steps, time_step, coarse, sink)
+    })
 }
 
 /// `recurse` on the vectors of an instruction set, compiled for it; called only where the
@@ -572,9 +577,10 @@ macro_rules! recurse_with {
             samples: &[BatchSample],
             steps: usize,
             time_step: f64,
+            coarse: &mut Vec<Vec<Lanes>>,
             sink: &mut Sink,
         ) -> std::result::Result<(), Divergence> {
-            recurse::<simd::$vector>(state, samples, steps, time_step, sink)
+            recurse::<simd::$vector>(state, samples, steps, time_step, coarse, sink)
         }
     };
 }
@@ -665,12 +671,11 @@ fn recurse<V: Vector>(
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
+    coarse: &mut Vec<Vec<Lanes>>,
     sink: &mut Sink,
 ) -> std::result::Result<(), Divergence> {
-    LANE_INPUTS.with_borrow_mut(|coarse| {
-        let schedule = lane_inputs(samples, &state.inverse_scales, steps, time_step, coarse);
-        recurse_on::<V>(state, &schedule, coarse, steps, sink)
-    })
+    let schedule = lane_inputs(samples, &state.inverse_scales, steps, time_step, coarse);
+    recurse_on::<V>(state, &schedule, coarse, steps, sink)
 }
 
 /// [`recurse`] on the lane-major inputs.
