@@ -1,0 +1,138 @@
+//! The Newton matrix of a damper solve, H = P + Σ_d w_d r_d r_dᵀ: a fixed symmetric positive
+//! definite P and, for each damper, a sparse row r_d and a weight w_d that changes from iteration to
+//! iteration. It is kept factored across iterations and time steps and brought up to date damper by
+//! damper with rank-one changes of its factor, O(n²) each: between steps most weights barely move,
+//! so a 40-floor step usually costs a few such changes rather than an O(n³) factorisation.
+
+use crate::error::{Error, Result};
+use crate::linalg::{cholesky, cholesky_rank_one, cholesky_solve};
+
+/// Rank-one changes of the factor since it was last formed, after which it is formed afresh so that
+/// the rounding of many downdates cannot accumulate.
+const MAX_RANK_ONE_CHANGES: usize = 200;
+
+/// What the factored weights must satisfy against the wanted ones.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) enum Curvature {
+    /// Within the model's band of them: Newton's step.
+    Tangent,
+    /// At least them: a model that lies above the objective (majorize-minimize).
+    Majorizing,
+}
+
+impl Curvature {
+    /// Whether the factored weight `have` serves for the wanted `want`.
+    fn serves(self, have: f64, want: f64, band: f64) -> bool {
+        match self {
+            Curvature::Tangent => have <= want * band && have * band >= want,
+            Curvature::Majorizing => have >= want,
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub(super) struct FactoredModel {
+    size: usize,
+    /// P, row-major size×size.
+    fixed: Vec<f64>,
+    /// r_d as (index, entry) pairs.
+    rows: Vec<Vec<(usize, f64)>>,
+    /// Newton's model may use weights up to this factor away from the wanted ones before they are
+    /// brought up to date: the step then still contracts the error by about band − 1 per iteration,
+    /// and most steps need no new factorisation.
+    band: f64,
+    /// The lowest index each row touches: rows of the factor above it do not change with w_d.
+    first_index: Vec<usize>,
+    /// Upper Cholesky factor of P + Σ factor_weights[d] r_d r_dᵀ, when `factored`.
+    factor: Vec<f64>,
+    factor_weights: Vec<f64>,
+    factored: bool,
+    pub(super) rank_one_changes: usize,
+    /// A rank-one change's vector.
+    change: Vec<f64>,
+    /// The weights the caller wants; [`Self::refresh`] brings the factor to them.
+    pub(super) weights: Vec<f64>,
+}
+
+impl FactoredModel {
+    pub(super) fn new(fixed: Vec<f64>, rows: Vec<Vec<(usize, f64)>>, band: f64) -> Self {
+        let size = (fixed.len() as f64).sqrt().round() as usize;
+        let count = rows.len();
+        FactoredModel {
+            size,
+            fixed,
+            first_index: rows.iter().map(|row| row.iter().map(|&(i, _)| i).min().unwrap_or(size)).collect(),
+            rows,
+            band,
+            factor: vec![0.0; size * size],
+            factor_weights: vec![0.0; count],
+            factored: false,
+            rank_one_changes: 0,
+            change: vec![0.0; size],
+            weights: vec![0.0; count],
+        }
+    }
+
+    /// Brings the factor to `weights` for the dampers whose factored weight does not serve: by
+    /// rank-one changes while they cost less than a factorisation, else by factoring afresh.
+    pub(super) fn refresh(&mut self, curvature: Curvature) -> Result<()> {
+        let n = self.size;
+        if self.factored && self.rank_one_changes < MAX_RANK_ONE_CHANGES {
+            let cost: usize = (0..self.weights.len())
+                .filter(|&d| !curvature.serves(self.factor_weights[d], self.weights[d], self.band))
+                .map(|d| 2 * (n - self.first_index[d]).pow(2))
+                .sum();
+            if cost <= n * n * n / 3 && self.change_stale_weights(curvature) {
+                return Ok(());
+            }
+        }
+        self.factor.copy_from_slice(&self.fixed);
+        for (row, &weight) in self.rows.iter().zip(&self.weights) {
+            for &(i, wi) in row {
+                for &(j, wj) in row {
+                    self.factor[i * n + j] += weight * wi * wj;
+                }
+            }
+        }
+        self.factor_weights.copy_from_slice(&self.weights);
+        self.rank_one_changes = 0;
+        self.factored = cholesky(&mut self.factor, n);
+        if !self.factored {
+            return Err(Error::Numerical("the damper Newton system lost positive definiteness".into()));
+        }
+        Ok(())
+    }
+
+    /// The rank-one changes of [`Self::refresh`]; `false` if a downdate failed.
+    fn change_stale_weights(&mut self, curvature: Curvature) -> bool {
+        let n = self.size;
+        for d in 0..self.weights.len() {
+            let (have, want) = (self.factor_weights[d], self.weights[d]);
+            if curvature.serves(have, want, self.band) {
+                continue;
+            }
+            let first = self.first_index[d];
+            let scale = (want - have).abs().sqrt();
+            self.change[first..].iter_mut().for_each(|x| *x = 0.0);
+            for &(i, wi) in &self.rows[d] {
+                self.change[i] += scale * wi;
+            }
+            let sign = if want > have { 1.0 } else { -1.0 };
+            if !cholesky_rank_one(&mut self.factor, n, &mut self.change, sign, first) {
+                self.factored = false;
+                return false;
+            }
+            self.factor_weights[d] = want;
+            self.rank_one_changes += 1;
+        }
+        true
+    }
+
+    /// step = −H⁻¹ gradient with the factored weights.
+    pub(super) fn newton_step(&self, gradient: &[f64], step: &mut [f64]) {
+        for (x, g) in step.iter_mut().zip(gradient) {
+            *x = -g;
+        }
+        cholesky_solve(&self.factor, self.size, step);
+    }
+}
