@@ -18,10 +18,10 @@ use crate::linalg::{dot, multiply_into};
 use crate::structure::Structure;
 use faer::MatRef;
 
-pub(super) const MAX_NEWTON_ITERATIONS: usize = 100;
+const MAX_NEWTON_ITERATIONS: usize = 100;
 /// Converged when no velocity moves by more than this fraction of the largest one (10⁻¹¹ m/s for
 /// this building's 10⁻² m/s), far below anything that shows in a response.
-pub(super) const STEP_TOLERANCE: f64 = 1e-9;
+const STEP_TOLERANCE: f64 = 1e-9;
 /// In the Hessian model, damper velocities below this fraction of the step tolerance count as this,
 /// which keeps |v|^{α−1} finite. An iterate inside the floor then moves by less than the tolerance,
 /// so the solve ends; the solution itself is unaffected because the gradient is exact.
@@ -105,10 +105,6 @@ fn subtract_into(out: &mut [f64], x: &[f64], y: &[f64]) {
     }
 }
 
-/// The band of the velocity solve's factored weights (see [`FactoredModel`]): on the full-order
-/// storm it took 5.7 Newton iterations and 0.6 factorisations per step.
-const WEIGHT_BAND: f64 = 1.25;
-
 /// Newton solver for s = a − W Gᵀ F(G s) in the new velocities, with preallocated work space
 /// reused every step. Its matrix W⁻¹ + Gᵀ diag(w) G is a [`FactoredModel`] kept across steps.
 #[derive(Debug, Clone)]
@@ -139,7 +135,7 @@ impl ImplicitDamperSolve {
         let size = (w_inverse.len() as f64).sqrt().round() as usize;
         let dampers_count = dampers.len();
         ImplicitDamperSolve {
-            model: FactoredModel::new(w_inverse.clone(), map.clone(), WEIGHT_BAND),
+            model: FactoredModel::new(w_inverse.clone(), map.clone()),
             w_inverse,
             coefficients: dampers.coefficients.clone(),
             exponent: dampers.exponent,
@@ -281,31 +277,29 @@ impl ImplicitDamperSolve {
     }
 }
 
-/// The damper solves' test problem: a chain of `n` floors with a damper (cos θ = 0.8, c = 40,
-/// α = 0.38) in every storey, and a dense, diagonally dominant W⁻¹.
-#[cfg(test)]
-pub(super) fn test_chain(n: usize) -> (Dampers, Vec<f64>) {
-    let floor_weights: Vec<Vec<(usize, f64)>> =
-        (0..n).map(|j| if j == 0 { vec![(0, 0.8)] } else { vec![(j, 0.8), (j - 1, -0.8)] }).collect();
-    let w_inverse: Vec<f64> = (0..n * n)
-        .map(|k| {
-            let (i, j) = ((k / n) as f64, (k % n) as f64);
-            0.5 / (1.0 + (i - j).powi(2)) + if i == j { 100.0 } else { 0.0 }
-        })
-        .collect();
-    (Dampers { coefficients: vec![40.0; n], exponent: 0.38, floor_weights }, w_inverse)
-}
-
-/// The chain's a at step `step` of a slowly turning load, which brings dampers to rest in turn.
-#[cfg(test)]
-pub(super) fn test_chain_load(n: usize, step: usize) -> Vec<f64> {
-    let t = step as f64 * 0.05;
-    (0..n).map(|j| 0.01 * (t + 0.3 * j as f64).sin() * (1.0 + j as f64) / n as f64).collect()
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The carried-factor test's problem: a chain of `n` floors with a damper (cos θ = 0.8, c = 40,
+    /// α = 0.38) in every storey, and a dense, diagonally dominant W⁻¹.
+    fn test_chain(n: usize) -> (Dampers, Vec<f64>) {
+        let floor_weights: Vec<Vec<(usize, f64)>> =
+            (0..n).map(|j| if j == 0 { vec![(0, 0.8)] } else { vec![(j, 0.8), (j - 1, -0.8)] }).collect();
+        let w_inverse: Vec<f64> = (0..n * n)
+            .map(|k| {
+                let (i, j) = ((k / n) as f64, (k % n) as f64);
+                0.5 / (1.0 + (i - j).powi(2)) + if i == j { 100.0 } else { 0.0 }
+            })
+            .collect();
+        (Dampers { coefficients: vec![40.0; n], exponent: 0.38, floor_weights }, w_inverse)
+    }
+
+    /// The chain's a at step `step` of a slowly turning load, which brings dampers to rest in turn.
+    fn test_chain_load(n: usize, step: usize) -> Vec<f64> {
+        let t = step as f64 * 0.05;
+        (0..n).map(|j| 0.01 * (t + 0.3 * j as f64).sin() * (1.0 + j as f64) / n as f64).collect()
+    }
 
     fn single(c: f64, alpha: f64) -> Dampers {
         Dampers { coefficients: vec![c], exponent: alpha, floor_weights: vec![vec![(0, 1.0)]] }

@@ -2,12 +2,10 @@
 //! M ü + C u̇ + K u + Bᵀ F(B u̇) = f(t), by Newmark's constant average acceleration.
 //!
 //! In the new velocities s the step reads A s = r − Bᵀ F(B s) with A = 2M/Δt + C + ΔtK/2, so it ends
-//! in the same implicit damper problem as the reduced model with W = A⁻¹ (solved in the damper
-//! forces here, [`DamperSolve`]). A different discretisation from the modal exponential integrator,
-//! so the two check each other.
+//! in the same implicit damper solve as the reduced model with W = A⁻¹. A different discretisation
+//! from the modal exponential integrator, so the two check each other.
 
-use super::damper::Dampers;
-use super::damper_solve::DamperSolve;
+use super::damper::{Dampers, ImplicitDamperSolve};
 use crate::error::{Error, Result};
 use crate::linalg::{cholesky, cholesky_solve, multiply_into};
 use crate::structure::{Modes, Structure};
@@ -73,7 +71,7 @@ pub fn integrate_full(
     let steps = forces.series[0].len();
     let mut a_eff: Vec<f64> =
         (0..n * n).map(|k| 2.0 / dt * system.mass[k] + system.damping[k] + 0.5 * dt * system.stiffness[k]).collect();
-    let mut solver = DamperSolve::new(a_eff.clone(), dampers.floor_weights.clone(), dampers);
+    let mut solver = ImplicitDamperSolve::new(a_eff.clone(), dampers.floor_weights.clone(), dampers);
     if !cholesky(&mut a_eff, n) {
         return Err(Error::Numerical("the Newmark iteration matrix is not positive definite".into()));
     }
@@ -102,7 +100,6 @@ pub fn integrate_full(
     let mut s = vec![0.0; n];
     let mut correction = vec![0.0; n];
     let mut damper_forces = vec![0.0; dampers.len()];
-    let mut previous_forces = vec![0.0; dampers.len()];
     for i in 1..steps {
         // r = f_{i+1} + M(2u̇/Δt + ü) − K(u + Δt u̇/2).
         for j in 0..n {
@@ -119,13 +116,9 @@ pub fn integrate_full(
         cholesky_solve(&a_eff, n, &mut rhs);
         let a = &rhs;
         if active {
-            // Predictors, one per formulation: the previous step's damper correction a − s, and
-            // the damper forces extrapolated linearly from the last two steps.
+            // Predictor: the previous step's damper correction a − s.
             for j in 0..n {
                 s[j] = a[j] - correction[j];
-            }
-            for (f, previous) in damper_forces.iter_mut().zip(previous_forces.iter_mut()) {
-                (*f, *previous) = (2.0 * *f - *previous, *f);
             }
             solver.solve(a, &mut s, &mut damper_forces)?;
             for j in 0..n {

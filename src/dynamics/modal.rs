@@ -7,8 +7,7 @@
 //! depend on the new velocities, which are affine in them, so each step ends in the implicit solve
 //! of [`super::damper`].
 
-use super::damper::Dampers;
-use super::damper_solve::DamperSolve;
+use super::damper::{Dampers, ImplicitDamperSolve};
 use crate::error::{Error, Result};
 use crate::structure::Modes;
 use crate::wind::ModalForces;
@@ -113,7 +112,7 @@ pub fn integrate_reduced(
     let w_inverse: Vec<f64> = (0..count * count)
         .map(|k| if k % (count + 1) == 0 { masses[k / count] / coefficients[k / count].gamma1[1] } else { 0.0 })
         .collect();
-    let mut solver = DamperSolve::new(w_inverse, map.clone(), dampers);
+    let mut solver = ImplicitDamperSolve::new(w_inverse, map.clone(), dampers);
 
     let mut y: Vec<f64> = (0..count).map(|m| forces.mean[m] / (masses[m] * modes.frequencies[m].powi(2))).collect();
     let mut v = vec![0.0; count];
