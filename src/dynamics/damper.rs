@@ -106,15 +106,13 @@ fn subtract_into(out: &mut [f64], x: &[f64], y: &[f64]) {
 }
 
 /// Newton solver for s = a − W Gᵀ F(G s) in the new velocities, with preallocated work space
-/// reused every step. Its matrix W⁻¹ + Gᵀ diag(w) G is a [`FactoredModel`] kept across steps.
+/// reused every step.
 #[derive(Debug, Clone)]
 pub struct ImplicitDamperSolve {
-    /// W⁻¹, row-major size×size.
-    w_inverse: Vec<f64>,
-    /// G as sparse rows: damper d's velocity is Σ weight·s[index].
-    map: Vec<Vec<(usize, f64)>>,
     coefficients: Vec<f64>,
     exponent: f64,
+    /// W⁻¹ + Gᵀ diag(w) G, kept factored across steps; it holds W⁻¹ (row-major, size×size) as its
+    /// fixed part and G as its rows (damper d's velocity is Σ weight·s[index]).
     model: FactoredModel,
     gradient: Vec<f64>,
     step: Vec<f64>,
@@ -135,11 +133,9 @@ impl ImplicitDamperSolve {
         let size = (w_inverse.len() as f64).sqrt().round() as usize;
         let dampers_count = dampers.len();
         ImplicitDamperSolve {
-            model: FactoredModel::new(w_inverse.clone(), map.clone()),
-            w_inverse,
+            model: FactoredModel::new(w_inverse, map),
             coefficients: dampers.coefficients.clone(),
             exponent: dampers.exponent,
-            map,
             gradient: vec![0.0; size],
             step: vec![0.0; size],
             trial: vec![0.0; size],
@@ -154,7 +150,7 @@ impl ImplicitDamperSolve {
 
     /// Velocities G s and their powers |v|^α.
     fn evaluate(&self, s: &[f64], velocities: &mut [f64], powers: &mut [f64]) {
-        for ((v, p), row) in velocities.iter_mut().zip(powers.iter_mut()).zip(&self.map) {
+        for ((v, p), row) in velocities.iter_mut().zip(powers.iter_mut()).zip(self.model.rows()) {
             *v = row.iter().map(|&(i, w)| w * s[i]).sum();
             *p = v.abs().powf(self.exponent);
         }
@@ -170,7 +166,7 @@ impl ImplicitDamperSolve {
     fn gradient_and_forces(&mut self, forces: &mut [f64]) {
         self.forces_at_iterate(forces);
         self.gradient.copy_from_slice(&self.residual);
-        for (row, f) in self.map.iter().zip(forces.iter()) {
+        for (row, f) in self.model.rows().iter().zip(forces.iter()) {
             for &(i, wi) in row {
                 self.gradient[i] += wi * f;
             }
@@ -231,15 +227,16 @@ impl ImplicitDamperSolve {
     /// J's change along a step p is computed directly, pᵀW⁻¹(s − a) + ½pᵀW⁻¹p plus the change of the
     /// dissipation: no cancellation between two nearly equal values of J. W⁻¹(s − a) is carried
     /// from iterate to iterate, one product with W⁻¹ per iteration instead of two (the full-order
-    /// integration of a 300 s storm: 7.4·10⁹ instructions instead of 8.5·10⁹). Its rounding, about 10⁻¹⁶ of the distance travelled,
-    /// stays below the tolerance unless the start is some 10⁷ times farther from the solution than
-    /// the velocities' own size; the integrators start from the previous step's correction.
+    /// integration of a 300 s storm: 7.4·10⁹ instructions instead of 8.5·10⁹). Its rounding, about
+    /// 10⁻¹⁶ of the distance travelled, stays below the tolerance unless the start is some 10⁷
+    /// times farther from the solution than the velocities' own size; the integrators start from
+    /// the previous step's correction.
     pub fn solve(&mut self, a: &[f64], s: &mut [f64], forces: &mut [f64]) -> Result<usize> {
         let (mut velocities, mut powers) = (std::mem::take(&mut self.velocities), std::mem::take(&mut self.powers));
         self.evaluate(s, &mut velocities, &mut powers);
         (self.velocities, self.powers) = (velocities, powers);
         subtract_into(&mut self.w_step, s, a);
-        multiply_into(&mut self.residual, &self.w_inverse, &self.w_step);
+        multiply_into(&mut self.residual, self.model.fixed(), &self.w_step);
         for iteration in 0..MAX_NEWTON_ITERATIONS {
             let scale = s.iter().chain(a).fold(0.0f64, |m, x| m.max(x.abs()));
             let tolerance = STEP_TOLERANCE * scale + f64::MIN_POSITIVE;
@@ -256,7 +253,7 @@ impl ImplicitDamperSolve {
                 self.forces_at_iterate(forces);
                 return Ok(iteration + 1);
             }
-            multiply_into(&mut self.w_step, &self.w_inverse, &self.step);
+            multiply_into(&mut self.w_step, self.model.fixed(), &self.step);
             for ((trial, x), step) in self.trial.iter_mut().zip(s.iter()).zip(&self.step) {
                 *trial = x + step;
             }
@@ -272,7 +269,7 @@ impl ImplicitDamperSolve {
                 self.advance(s, true);
             } else {
                 self.model_step(Curvature::Majorizing, floor)?;
-                multiply_into(&mut self.w_step, &self.w_inverse, &self.step);
+                multiply_into(&mut self.w_step, self.model.fixed(), &self.step);
                 self.advance(s, false);
             }
         }
@@ -309,9 +306,10 @@ mod tests {
     }
 
     /// One unknown, one damper: s + w c sgn(s)|s|^α = a, a monotone scalar equation whose root
-    /// bisection finds independently. Starts on the wrong side, far away, at zero, a stiff damper (w c large)
-    /// and a root at zero (where |v|^α has its infinite slope) all converge, to the solver's
-    /// tolerance of 10⁻⁹ of the largest velocity (with a factor 2 for its estimate of the error).
+    /// bisection finds independently. Starts on the wrong side, far away and at zero, a stiff damper
+    /// (w c large) and a root at zero (where |v|^α has its infinite slope) all converge, to the
+    /// solver's tolerance of 10⁻⁹ of the largest velocity (with a factor 2 for its estimate of the
+    /// error).
     #[test]
     fn scalar_problem_is_solved_from_any_start() {
         for (a, w, c) in [(1.0, 0.1, 2.0), (-0.3, 1.0, 50.0), (1e-6, 1.0, 1e4), (0.0, 1.0, 1.0), (2.0, 1e-8, 1e5)] {

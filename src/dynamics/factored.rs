@@ -36,6 +36,7 @@ impl Curvature {
     }
 }
 
+/// H = P + Σ_d w_d r_d r_dᵀ with its upper Cholesky factor and the work space to change it.
 #[derive(Debug, Clone)]
 pub(super) struct FactoredModel {
     size: usize,
@@ -72,6 +73,16 @@ impl FactoredModel {
             change: vec![0.0; size],
             weights: vec![0.0; count],
         }
+    }
+
+    /// P.
+    pub(super) fn fixed(&self) -> &[f64] {
+        &self.fixed
+    }
+
+    /// The rows r_d.
+    pub(super) fn rows(&self) -> &[Vec<(usize, f64)>] {
+        &self.rows
     }
 
     /// Brings the factor to `weights` for the dampers whose factored weight does not serve: by
