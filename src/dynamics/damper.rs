@@ -156,6 +156,13 @@ impl ImplicitDamperSolve {
         }
     }
 
+    /// The current iterate's velocities and powers, at `s`.
+    fn evaluate_iterate(&mut self, s: &[f64]) {
+        let (mut velocities, mut powers) = (std::mem::take(&mut self.velocities), std::mem::take(&mut self.powers));
+        self.evaluate(s, &mut velocities, &mut powers);
+        (self.velocities, self.powers) = (velocities, powers);
+    }
+
     /// Σ_d c_d/(1+α)·|v_d|^{1+α}, from the velocities and their powers |v|^α.
     fn dissipation(&self, velocities: &[f64], powers: &[f64]) -> f64 {
         let p = 1.0 + self.exponent;
@@ -209,9 +216,7 @@ impl ImplicitDamperSolve {
             std::mem::swap(&mut self.velocities, &mut self.trial_velocities);
             std::mem::swap(&mut self.powers, &mut self.trial_powers);
         } else {
-            let (mut velocities, mut powers) = (std::mem::take(&mut self.velocities), std::mem::take(&mut self.powers));
-            self.evaluate(s, &mut velocities, &mut powers);
-            (self.velocities, self.powers) = (velocities, powers);
+            self.evaluate_iterate(s);
         }
     }
 
@@ -232,9 +237,7 @@ impl ImplicitDamperSolve {
     /// times farther from the solution than the velocities' own size; the integrators start from
     /// the previous step's correction.
     pub fn solve(&mut self, a: &[f64], s: &mut [f64], forces: &mut [f64]) -> Result<usize> {
-        let (mut velocities, mut powers) = (std::mem::take(&mut self.velocities), std::mem::take(&mut self.powers));
-        self.evaluate(s, &mut velocities, &mut powers);
-        (self.velocities, self.powers) = (velocities, powers);
+        self.evaluate_iterate(s);
         subtract_into(&mut self.w_step, s, a);
         multiply_into(&mut self.residual, self.model.fixed(), &self.w_step);
         for iteration in 0..MAX_NEWTON_ITERATIONS {
@@ -246,10 +249,7 @@ impl ImplicitDamperSolve {
             let largest_step = self.step.iter().fold(0.0f64, |m, x| m.max(x.abs()));
             if largest_step <= tolerance {
                 s.iter_mut().zip(&self.step).for_each(|(x, d)| *x += d);
-                let (mut velocities, mut powers) =
-                    (std::mem::take(&mut self.velocities), std::mem::take(&mut self.powers));
-                self.evaluate(s, &mut velocities, &mut powers);
-                (self.velocities, self.powers) = (velocities, powers);
+                self.evaluate_iterate(s);
                 self.forces_at_iterate(forces);
                 return Ok(iteration + 1);
             }
