@@ -14,6 +14,9 @@ pub enum Error {
     Numerical(String),
     /// The caller asked the work to stop.
     Cancelled,
+    /// Something outside the request failed: the database, the runtime, a thread that panicked.
+    /// Neither bad input nor numerics, so the command line gives it its own exit code (1).
+    Internal(String),
 }
 
 impl Error {
@@ -28,6 +31,7 @@ impl fmt::Display for Error {
             Error::Invalid { field, reason } => write!(f, "{field}: {reason}"),
             Error::Numerical(message) => write!(f, "numerical failure: {message}"),
             Error::Cancelled => write!(f, "cancelled"),
+            Error::Internal(message) => write!(f, "internal failure: {message}"),
         }
     }
 }

@@ -63,7 +63,8 @@ fn main() -> ExitCode {
             eprintln!("error: {error}");
             ExitCode::from(match error {
                 Error::Invalid { .. } => 2,
-                _ => 1,
+                Error::Internal(_) => 3,
+                Error::Numerical(_) | Error::Cancelled => 1,
             })
         }
     }

@@ -149,7 +149,7 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
     let single = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
         .build()
-        .map_err(|e| Error::Numerical(format!("a one-thread pool: {e}")))?;
+        .map_err(|e| Error::Internal(format!("a one-thread pool: {e}")))?;
     single.install(|| {
         let row = |stage: &str, median_seconds: f64| BenchRow { stage: stage.into(), median_seconds, repetitions };
         let field = time(repetitions, |r| {

@@ -1,6 +1,7 @@
 //! `windmeta serve` settings, as flags or environment variables.
 
-use clap::{Args, ValueEnum};
+use crate::error::{Error, Result};
+use clap::{Args, Parser, ValueEnum};
 
 /// What a replica does, so that request handling and heavy work can scale apart.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
@@ -53,4 +54,79 @@ pub struct ServeArgs {
     /// Origins allowed by CORS, comma separated (none: no CORS headers).
     #[arg(long, env = "WINDMETA_CORS_ORIGINS", value_delimiter = ',')]
     pub cors_origins: Vec<String>,
+    /// Synchronous exceedance requests sampled at once (0: one per core); beyond, 503 with
+    /// `Retry-After`. Each uses every core, so more only queue inside the process.
+    #[arg(long, env = "WINDMETA_MAX_SYNC_REQUESTS", default_value_t = 0)]
+    pub max_sync_requests: usize,
+    /// A synchronous exceedance request that has not been answered after this many seconds is
+    /// cancelled and answered 503.
+    #[arg(long, env = "WINDMETA_SYNC_TIMEOUT_S", default_value_t = 60)]
+    pub sync_timeout_s: u64,
+    /// Operation event streams (SSE) open at once on this replica; beyond, 503 with `Retry-After`.
+    #[arg(long, env = "WINDMETA_MAX_EVENT_STREAMS", default_value_t = 256)]
+    pub max_event_streams: usize,
+    /// Hours an `Idempotency-Key` is remembered; older keys are pruned and may be used again.
+    #[arg(long, env = "WINDMETA_IDEMPOTENCY_TTL_H", default_value_t = 24)]
+    pub idempotency_ttl_h: u64,
+    /// Stored metamodels kept loaded in memory (least recently used are dropped first).
+    #[arg(long, env = "WINDMETA_LOADED_METAMODELS", default_value_t = 16)]
+    pub loaded_metamodels: usize,
+    /// Memory a job may plan to hold (MiB), estimated from the request before it is queued.
+    #[arg(long, env = "WINDMETA_MAX_JOB_MEMORY_MB", default_value_t = 4096)]
+    pub max_job_memory_mb: usize,
+    /// Reference storm steps a job may integrate in all (a calibration's experiments or a
+    /// validation's samples, times the steps per storm), checked before it is queued. The paper's
+    /// calibration needs 1.8·10⁷ (about a minute on 2 cores); the default allows 55 times that.
+    #[arg(long, env = "WINDMETA_MAX_JOB_STEPS", default_value_t = 1_000_000_000)]
+    pub max_job_steps: u64,
+}
+
+impl Default for ServeArgs {
+    /// The settings as `windmeta serve` takes them with no flags (environment variables apply).
+    fn default() -> Self {
+        #[derive(Parser)]
+        struct Command {
+            #[command(flatten)]
+            args: ServeArgs,
+        }
+        Command::parse_from(["windmeta"]).args
+    }
+}
+
+impl ServeArgs {
+    /// Synchronous sampling requests admitted at once.
+    pub fn sync_request_slots(&self) -> usize {
+        match self.max_sync_requests {
+            0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            n => n,
+        }
+    }
+
+    /// Settings that cannot work are refused before anything starts.
+    pub fn check(&self) -> Result<()> {
+        if self.workers == 0 && self.role != Role::Api {
+            return Err(Error::invalid("workers", "at least one worker is needed"));
+        }
+        for (field, value) in [
+            ("max_body_bytes", self.max_body_bytes),
+            ("max_samples", self.max_samples),
+            ("max_queued_jobs", self.max_queued_jobs),
+            ("max_experiments", self.max_experiments),
+            ("max_event_streams", self.max_event_streams),
+            ("loaded_metamodels", self.loaded_metamodels),
+            ("max_job_memory_mb", self.max_job_memory_mb),
+            ("max_job_steps", self.max_job_steps as usize),
+        ] {
+            if value == 0 {
+                return Err(Error::invalid(field, "must be at least 1"));
+            }
+        }
+        if self.lease_ms < 1000 {
+            return Err(Error::invalid("lease_ms", "must be at least 1000 (leases are renewed every second)"));
+        }
+        if self.sync_timeout_s == 0 {
+            return Err(Error::invalid("sync_timeout_s", "must be at least 1"));
+        }
+        Ok(())
+    }
 }

@@ -54,6 +54,7 @@ impl From<crate::error::Error> for ApiError {
             crate::error::Error::Cancelled => {
                 ApiError::new(StatusCode::CONFLICT, "Cancelled", "the work was cancelled")
             }
+            crate::error::Error::Internal(message) => ApiError::internal(message),
         }
     }
 }

@@ -153,7 +153,7 @@ type WorkFuture = Pin<Box<dyn Future<Output = Result<(Output, String)>> + Send>>
 
 /// A blocking computation as a future; a panic becomes an error.
 async fn blocking<T: Send + 'static>(work: impl FnOnce() -> Result<T> + Send + 'static) -> Result<T> {
-    tokio::task::spawn_blocking(work).await.map_err(|panic| Error::Numerical(format!("the job panicked: {panic}")))?
+    tokio::task::spawn_blocking(work).await.map_err(|panic| Error::Internal(format!("the job panicked: {panic}")))?
 }
 
 /// A stored metamodel and its study, for jobs that sample it.
@@ -161,7 +161,7 @@ async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Problem
     let body = store
         .metamodel_body(id)
         .await
-        .map_err(|e| Error::Numerical(format!("database: {e}")))?
+        .map_err(|e| Error::Internal(format!("database: {e}")))?
         .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
     let metamodel = Metamodel::from_json(&body)?;
     let problem = metamodel.problem()?;
@@ -218,7 +218,7 @@ async fn coordinate(
     options: CalibrationOptions,
     shared: Arc<Shared>,
 ) -> Result<(Output, String)> {
-    let database = |e: sqlx::Error| Error::Numerical(format!("database: {e}"));
+    let database = |e: sqlx::Error| Error::Internal(format!("database: {e}"));
     let problem = Arc::new(problem);
     let options = Arc::new(options);
     let planned = {
@@ -264,7 +264,8 @@ async fn coordinate(
         }
     }
     for text in state.store.task_results(&id).await.map_err(database)? {
-        let chunk: Vec<ExperimentFit> = serde_json::from_str(&text).map_err(|e| Error::Numerical(e.to_string()))?;
+        let chunk: Vec<ExperimentFit> =
+            serde_json::from_str(&text).map_err(|e| Error::Internal(format!("a stored task result: {e}")))?;
         fits.extend(chunk);
     }
     let seconds = StageSeconds { coefficients: started.elapsed().as_secs_f64(), ..planned.seconds.clone() };

@@ -1,6 +1,7 @@
 //! The HTTP service (axum on tokio): calibration jobs run by workers off the async runtime, stored
 //! metamodels, exceedance requests. The only module with tokio, axum and sqlx.
 
+mod cache;
 mod config;
 mod error;
 mod exceedance;
@@ -16,32 +17,39 @@ pub use store::testing;
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
 use crate::structure::CustomStructure;
-use crate::surrogate::{CalibrationOptions, Metamodel, Refinement};
+use crate::surrogate::{CalibrationCost, CalibrationOptions, Refinement};
 use crate::uncertainty::Marginal;
 use crate::wind::WindSite;
+use cache::{Loaded, LoadedMetamodels};
+use routes::ApiKeys;
 use serde::{Deserialize, Serialize};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::BTreeMap;
 use std::net::SocketAddr;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use store::Store;
 use tokio::net::TcpListener;
-use tokio::sync::Notify;
-
-/// A stored metamodel read back, with the study it rebuilds.
-type Loaded = Arc<(Metamodel, Problem)>;
+use tokio::sync::{Notify, Semaphore};
 
 /// What every handler and worker shares.
 #[derive(Clone)]
 pub struct AppState {
+    /// Jobs, tasks, idempotency keys and metamodels; shared by every replica on one database.
     store: Store,
     config: Arc<ServeArgs>,
+    /// The API keys as digests (none: the API is open).
+    keys: Arc<ApiKeys>,
     /// Wakes an idle worker when a job is queued (they also poll, for jobs queued elsewhere).
     wake: Arc<Notify>,
-    /// Set on shutdown: readiness fails, workers stop claiming and give their jobs back.
+    /// Set on shutdown: readiness fails, workers stop claiming and give their jobs back, and
+    /// synchronous sampling stops.
     draining: Arc<AtomicBool>,
-    /// Metamodels read back from the store, with their rebuilt studies, by id.
-    loaded: Arc<Mutex<HashMap<String, Loaded>>>,
+    /// Metamodels read back from the store, with their rebuilt studies, by id; bounded.
+    loaded: Arc<Mutex<LoadedMetamodels>>,
+    /// One permit per synchronous sampling request allowed to run; none left means 503.
+    sampling: Arc<Semaphore>,
+    /// One permit per open event stream on this replica; none left means 503.
+    streams: Arc<Semaphore>,
 }
 
 /// `POST /v1/calibrations`: every field optional, the paper's values by default.
@@ -107,6 +115,8 @@ impl CalibrationRequest {
         if options.experiments > config.max_experiments {
             return Err(Error::invalid("experiments", format!("at most {} on this server", config.max_experiments)));
         }
+        CalibrationCost::estimate(&problem, &options, rayon::current_num_threads())
+            .check(config.max_job_memory_mb as f64 * 1024.0 * 1024.0, config.max_job_steps as f64)?;
         Ok((problem, options))
     }
 }
@@ -146,18 +156,27 @@ pub struct Application {
 }
 
 impl Application {
-    /// Connects the database (running migrations) and binds the address (port 0 for any).
-    pub async fn build(config: ServeArgs) -> std::result::Result<Application, String> {
-        let store =
-            Store::connect(&config.database_url).await.map_err(|e| format!("database {}: {e}", config.database_url))?;
-        let listener =
-            TcpListener::bind(&config.listen).await.map_err(|e| format!("cannot listen on {}: {e}", config.listen))?;
+    /// Checks the settings, connects the database (running migrations) and binds the address
+    /// (port 0 for any). Bad settings are [`Error::Invalid`]; a database or address that cannot
+    /// be reached is [`Error::Internal`].
+    pub async fn build(config: ServeArgs) -> Result<Application> {
+        config.check()?;
+        let keys = ApiKeys::new(&config.api_keys)?;
+        let store = Store::connect(&config.database_url)
+            .await
+            .map_err(|e| Error::Internal(format!("database {}: {e}", config.database_url)))?;
+        let listener = TcpListener::bind(&config.listen)
+            .await
+            .map_err(|e| Error::Internal(format!("cannot listen on {}: {e}", config.listen)))?;
         let state = AppState {
             store,
-            config: Arc::new(config),
+            keys: Arc::new(keys),
             wake: Arc::new(Notify::new()),
             draining: Arc::new(AtomicBool::new(false)),
-            loaded: Arc::new(Mutex::new(HashMap::new())),
+            loaded: Arc::new(Mutex::new(LoadedMetamodels::new(config.loaded_metamodels))),
+            sampling: Arc::new(Semaphore::new(config.sync_request_slots())),
+            streams: Arc::new(Semaphore::new(config.max_event_streams)),
+            config: Arc::new(config),
         };
         Ok(Application { listener, state })
     }
@@ -213,15 +232,12 @@ pub fn serve(args: &ServeArgs) -> Result<String> {
     let _ = tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
         .try_init();
-    if args.workers == 0 && args.role != Role::Api {
-        return Err(Error::invalid("workers", "at least one worker is needed"));
-    }
     let runtime =
-        tokio::runtime::Runtime::new().map_err(|e| Error::Numerical(format!("cannot start the runtime: {e}")))?;
+        tokio::runtime::Runtime::new().map_err(|e| Error::Internal(format!("cannot start the runtime: {e}")))?;
     runtime.block_on(async {
-        let app = Application::build(args.clone()).await.map_err(|e| Error::invalid("serve", e))?;
+        let app = Application::build(args.clone()).await?;
         tracing::info!(address = %app.local_addr(), role = ?args.role, "windmeta listening");
-        app.run(shutdown_signal()).await.map_err(|e| Error::Numerical(format!("server: {e}")))
+        app.run(shutdown_signal()).await.map_err(|e| Error::Internal(format!("server: {e}")))
     })?;
     Ok("stopped".into())
 }

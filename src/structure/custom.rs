@@ -5,15 +5,29 @@ use crate::error::{Error, Result};
 use faer::Mat;
 use serde::{Deserialize, Serialize};
 
+/// Most floors of a custom structure: its eigen-analysis is dense (n³) and its full-order
+/// reference integrates n degrees of freedom per step, so 200 keeps both well under a second per
+/// study and a storm's full field (n series of the storm's length) within a few hundred MB; the
+/// tallest buildings have about 160 storeys.
+pub const MAX_FLOORS: usize = 200;
+/// Most damper coefficient groups: each is one more uncertain input (`damper_c1` … `damper_c10`),
+/// and the polynomial chaos bases grow with the number of inputs.
+pub const MAX_DAMPER_GROUPS: usize = 10;
+/// Most dampers of a layout: four per storey.
+pub const MAX_DAMPERS: usize = 4 * MAX_FLOORS;
+
 /// A damper of a custom layout, in the terms a user writes down.
 #[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CustomDamper {
     /// Upper floor of the damper (1-based); it joins this floor to the one below (or the ground).
+    #[schema(minimum = 1, maximum = 200)]
     pub floor: usize,
     /// Coefficient group (1-based): dampers of a group share the input `damper_c{group}`.
+    #[schema(minimum = 1, maximum = 10)]
     pub group: usize,
     /// Cosine of the brace angle to the horizontal (1 for a horizontal damper).
+    #[schema(exclusive_minimum = 0, maximum = 1)]
     pub cos_angle: f64,
 }
 
@@ -21,18 +35,24 @@ pub struct CustomDamper {
 #[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct CustomStructure {
-    /// Mass matrix (kg), one row per floor from the ground up.
+    /// Mass matrix (kg), one row per floor from the ground up; square, at most 200 floors.
+    #[schema(min_items = 1, max_items = 200)]
     pub mass: Vec<Vec<f64>>,
-    /// Lateral stiffness matrix (N/m) at `reference_youngs_modulus`.
+    /// Lateral stiffness matrix (N/m) at `reference_youngs_modulus`; square, as `mass`.
+    #[schema(min_items = 1, max_items = 200)]
     pub stiffness: Vec<Vec<f64>>,
-    /// Elevation of each floor (m).
+    /// Elevation of each floor (m), increasing.
+    #[schema(min_items = 1, max_items = 200)]
     pub floor_elevations_m: Vec<f64>,
     /// Façade width of each floor exposed to the wind (m).
+    #[schema(min_items = 1, max_items = 200)]
     pub floor_widths_m: Vec<f64>,
     /// The Young's modulus at which `stiffness` holds; the input `youngs_modulus` scales it.
     #[serde(default = "default_modulus")]
+    #[schema(exclusive_minimum = 0)]
     pub reference_youngs_modulus: f64,
     #[serde(default)]
+    #[schema(max_items = 800)]
     pub dampers: Vec<CustomDamper>,
 }
 
@@ -55,6 +75,22 @@ fn to_matrix(field: &str, rows: &[Vec<f64>]) -> Result<Mat<f64>> {
 
 impl CustomStructure {
     pub fn build(&self) -> Result<Structure> {
+        for (field, count) in [
+            ("mass", self.mass.len()),
+            ("stiffness", self.stiffness.len()),
+            ("floor_elevations_m", self.floor_elevations_m.len()),
+            ("floor_widths_m", self.floor_widths_m.len()),
+        ] {
+            if count > MAX_FLOORS {
+                return Err(Error::invalid(field, format!("at most {MAX_FLOORS} floors, got {count}")));
+            }
+        }
+        if self.dampers.len() > MAX_DAMPERS {
+            return Err(Error::invalid(
+                "dampers",
+                format!("at most {MAX_DAMPERS} dampers, got {}", self.dampers.len()),
+            ));
+        }
         let stiffness = to_matrix("stiffness", &self.stiffness)?;
         let mass = to_matrix("mass", &self.mass)?;
         let floors = self.floor_elevations_m.len();
@@ -63,9 +99,13 @@ impl CustomStructure {
             if d.floor == 0 || d.floor > floors {
                 return Err(Error::invalid(format!("dampers[{k}].floor"), format!("must be between 1 and {floors}")));
             }
-            if d.group == 0 {
-                return Err(Error::invalid(format!("dampers[{k}].group"), "groups are numbered from 1"));
+            if d.group == 0 || d.group > MAX_DAMPER_GROUPS {
+                return Err(Error::invalid(
+                    format!("dampers[{k}].group"),
+                    format!("groups are numbered from 1 to {MAX_DAMPER_GROUPS}, got {}", d.group),
+                ));
             }
+
             dampers.push(DamperPlacement {
                 lower_floor: (d.floor - 1).checked_sub(1),
                 upper_floor: d.floor - 1,
@@ -132,5 +172,14 @@ mod tests {
         let mut c = two_floors();
         c.dampers[0].floor = 3;
         assert!(c.build().unwrap_err().to_string().starts_with("dampers[0].floor"));
+        let mut c = two_floors();
+        c.dampers[0].group = MAX_DAMPER_GROUPS + 1;
+        assert!(c.build().unwrap_err().to_string().starts_with("dampers[0].group"));
+        let mut c = two_floors();
+        c.dampers[0].cos_angle = 0.0;
+        assert!(c.build().unwrap_err().to_string().contains("cos_angle"));
+        let mut c = two_floors();
+        c.floor_elevations_m = (1..=MAX_FLOORS + 1).map(|j| j as f64).collect();
+        assert!(c.build().unwrap_err().to_string().starts_with("floor_elevations_m: at most"));
     }
 }

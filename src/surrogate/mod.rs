@@ -3,6 +3,7 @@
 
 pub mod batch;
 mod calibrate;
+mod cost;
 pub mod identify;
 pub mod lars;
 mod metamodel;
@@ -14,6 +15,7 @@ mod simd;
 
 pub use batch::{ForceSource, LANES};
 pub use calibrate::{CalibrationOptions, MAX_EXPERIMENTS, ModeDiagnostics, Observer, Progress, Silent, calibrate};
+pub use cost::{CalibrationCost, MAX_PCE_BASIS};
 pub use identify::Refinement;
 pub use metamodel::{CalibrationSummary, Metamodel, ModalBasis, ModeModel, StageSeconds, StaticResponse};
 pub use parametrization::Parametrization;

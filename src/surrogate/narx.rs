@@ -98,21 +98,31 @@ impl fmt::Display for NarxTerm {
 #[serde(default, deny_unknown_fields)]
 pub struct NarxOptions {
     /// Largest total degree l₁ + l₂ of a term.
+    #[schema(minimum = 1, maximum = 5)]
     pub max_degree: u32,
     /// Output lags 1 ..= output_lags.
+    #[schema(minimum = 1, maximum = 10)]
     pub output_lags: usize,
     /// Input lags 0 ..= input_lags.
+    #[schema(minimum = 0, maximum = 10)]
     pub input_lags: usize,
-    /// Largest power of the input in a term.
+    /// Largest power of the input in a term (at most `max_degree`).
+    #[schema(minimum = 1, maximum = 5)]
     pub max_input_power: u32,
     /// Whether products of an output power and an input power are candidates.
     pub cross_terms: bool,
     /// Most terms in a selected model (the constant included).
+    #[schema(minimum = 2, maximum = 30)]
     pub max_terms: usize,
     /// Lags 1 ..= coupling_lags of every other retained mode's displacement as candidates (0: each
     /// mode on its own, as in the paper).
+    #[schema(minimum = 0, maximum = 10)]
     pub coupling_lags: usize,
 }
+
+/// Most terms a selected NARX model may have: every term is a coefficient with its own polynomial
+/// chaos expansion, and the free run's cost grows with them; the paper's models have at most 10.
+pub const MAX_NARX_TERMS: usize = 30;
 
 impl Default for NarxOptions {
     fn default() -> Self {
@@ -145,8 +155,11 @@ impl NarxOptions {
         if self.max_input_power == 0 || self.max_input_power > self.max_degree {
             return Err(Error::invalid("narx.max_input_power", "must be between 1 and max_degree"));
         }
-        if self.max_terms < 2 {
-            return Err(Error::invalid("narx.max_terms", "must be at least 2"));
+        if !(2..=MAX_NARX_TERMS).contains(&self.max_terms) {
+            return Err(Error::invalid(
+                "narx.max_terms",
+                format!("must be between 2 and {MAX_NARX_TERMS}, got {}", self.max_terms),
+            ));
         }
         if self.coupling_lags > 10 {
             return Err(Error::invalid(

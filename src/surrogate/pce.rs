@@ -17,16 +17,27 @@ use serde::{Deserialize, Serialize};
 #[serde(default, deny_unknown_fields)]
 pub struct PceOptions {
     /// Largest total degree tried.
+    #[schema(minimum = 1, maximum = 20)]
     pub max_degree: usize,
     /// q of the hyperbolic truncation (1 = total degree).
+    #[schema(exclusive_minimum = 0, maximum = 1)]
     pub q_norm: f64,
     /// Most inputs in one polynomial term.
+    #[schema(minimum = 1, maximum = 14)]
     pub max_interaction: usize,
     /// Stop raising the degree after this many degrees without improvement.
+    #[schema(minimum = 1, maximum = 20)]
     pub degree_early_stop: usize,
     /// Stop a LARS path after this many steps without a better corrected LOO error.
+    #[schema(minimum = 1, maximum = 1000)]
     pub lars_early_stop: usize,
 }
+
+/// Most inputs in one polynomial term: every input of the largest study (four structural inputs,
+/// ten damper groups and the wind speed, less one fixed).
+pub const MAX_INTERACTION: usize = 14;
+/// Longest run of LARS steps without improvement before a path stops.
+pub const MAX_LARS_EARLY_STOP: usize = 1000;
 
 impl Default for PceOptions {
     fn default() -> Self {
@@ -42,13 +53,36 @@ impl PceOptions {
         if !(self.q_norm > 0.0 && self.q_norm <= 1.0) {
             return Err(Error::invalid("pce.q_norm", format!("must lie in (0, 1], got {}", self.q_norm)));
         }
-        if self.max_interaction == 0 {
-            return Err(Error::invalid("pce.max_interaction", "must be at least 1"));
+        if !(1..=MAX_INTERACTION).contains(&self.max_interaction) {
+            return Err(Error::invalid(
+                "pce.max_interaction",
+                format!("must be between 1 and {MAX_INTERACTION}, got {}", self.max_interaction),
+            ));
         }
-        if self.degree_early_stop == 0 || self.lars_early_stop == 0 {
-            return Err(Error::invalid("pce", "early-stop counts must be at least 1"));
+        if !(1..=20).contains(&self.degree_early_stop) {
+            return Err(Error::invalid(
+                "pce.degree_early_stop",
+                format!("must be between 1 and 20, got {}", self.degree_early_stop),
+            ));
+        }
+        if !(1..=MAX_LARS_EARLY_STOP).contains(&self.lars_early_stop) {
+            return Err(Error::invalid(
+                "pce.lars_early_stop",
+                format!("must be between 1 and {MAX_LARS_EARLY_STOP}, got {}", self.lars_early_stop),
+            ));
         }
         Ok(())
+    }
+
+    /// An upper bound on the candidate polynomials of `inputs` variables at the largest degree:
+    /// with q = 1, the multi-indices of total degree ≤ p with at most r nonzero entries number
+    /// Σ_{k≤r} C(M, k)·C(p, k) (k inputs chosen, then k positive degrees summing to at most p);
+    /// q < 1 keeps fewer.
+    pub fn basis_size_bound(&self, inputs: usize) -> f64 {
+        let binomial = |n: usize, k: usize| -> f64 { (0..k).map(|i| (n - i) as f64 / (i + 1) as f64).product() };
+        (0..=self.max_interaction.min(inputs).min(self.max_degree))
+            .map(|k| binomial(inputs, k) * binomial(self.max_degree, k))
+            .sum()
     }
 }
 
@@ -382,6 +416,10 @@ mod tests {
         }
     }
 
+    fn inputs_of(count: usize) -> Vec<usize> {
+        (0..count).collect()
+    }
+
     /// |A(p, 1, 2)| = 1 + Mp + C(M,2)·p(p−1)/2 (method notes §5).
     #[test]
     fn candidate_set_sizes() {
@@ -389,6 +427,12 @@ mod tests {
         assert_eq!(candidate_terms(&inputs, 5, 1.0, 2).len(), 1 + 8 * 5 + 28 * 10);
         assert_eq!(candidate_terms(&inputs, 10, 1.0, 2).len(), 1341);
         assert_eq!(candidate_terms(&inputs[..3], 3, 1.0, 3).len(), 20); // C(3+3, 3)
+        // The bound a request is judged by before any work is exactly the size at q = 1.
+        for (m, p, r) in [(8, 10, 2), (8, 5, 8), (3, 3, 3), (14, 6, 4), (2, 1, 2)] {
+            let options = PceOptions { max_degree: p, max_interaction: r, ..PceOptions::default() };
+            let exact = candidate_terms(&inputs_of(m), p, 1.0, r).len() as f64;
+            assert_eq!(options.basis_size_bound(m), exact, "M = {m}, p = {p}, r = {r}");
+        }
         let hyperbolic = candidate_terms(&inputs[..2], 4, 0.5, 2);
         assert!(
             hyperbolic.iter().all(|t| t.iter().map(|&(_, d)| (d as f64).sqrt()).sum::<f64>().powi(2) <= 4.0 + 1e-9)

@@ -24,6 +24,10 @@ use std::sync::Arc;
 /// One spectral line or transformed point.
 pub(super) type Bin = Complex<f32>;
 
+/// Shapes whose workspaces a thread keeps; the oldest is dropped past this, so that studies of
+/// many different discretisations, one after another, do not accumulate buffers.
+const KEPT_SHAPES: usize = 4;
+
 thread_local! {
     /// Transforms (plans, twiddle factors, buffers) and sums are built once per shape and thread,
     /// not per storm: a storm's buffers are megabytes, and allocating them afresh cost page faults.
@@ -46,6 +50,9 @@ pub(super) fn with_workspace<T>(
             None => {
                 let transform = PrunedInverse::new(len, lines);
                 let sum = PolyphaseSum::new(transform.rows);
+                if cache.len() == KEPT_SHAPES {
+                    cache.remove(0);
+                }
                 cache.push((transform, sum));
                 cache.len() - 1
             }

@@ -9,28 +9,40 @@ use std::f64::consts::PI;
 #[serde(default, deny_unknown_fields)]
 pub struct WindSite {
     /// Roughness length at the site, z₀ (m).
+    #[schema(exclusive_minimum = 0)]
     pub site_roughness_m: f64,
     /// Roughness length at the meteorological station, z₀₁ (m).
+    #[schema(exclusive_minimum = 0)]
     pub station_roughness_m: f64,
-    /// Height of the station's anemometer, H_met (m).
+    /// Height of the station's anemometer, H_met (m); above its roughness length.
+    #[schema(exclusive_minimum = 0)]
     pub station_height_m: f64,
     /// β of Eq. (20).
+    #[schema(exclusive_minimum = 0)]
     pub shear_factor: f64,
     /// Von Kármán's constant k_a.
+    #[schema(exclusive_minimum = 0)]
     pub von_karman: f64,
     /// C_z of the coherence, Eq. (22).
+    #[schema(exclusive_minimum = 0)]
     pub coherence_decay: f64,
     /// Air density ρ (kg/m³).
+    #[schema(exclusive_minimum = 0)]
     pub air_density_kg_m3: f64,
     /// Quasi-steady pressure coefficient C̄.
+    #[schema(exclusive_minimum = 0)]
     pub pressure_coefficient: f64,
-    /// Cut-off frequency ω_up (rad/s); the wind has no energy above 2π rad/s.
+    /// Cut-off frequency ω_up (rad/s); the wind has no energy above 2π rad/s, and at most 60.
+    #[schema(exclusive_minimum = 0, maximum = 60)]
     pub cutoff_rad_s: f64,
     /// Frequencies per component, N (81 920 phases for 40 floors means 2048).
+    #[schema(minimum = 16, maximum = 65536)]
     pub frequencies: usize,
     /// Time step on which the wind (the full floor field, or the modal forces directly) is
     /// generated before cubic interpolation to the storm's time step (s); it must resolve the
-    /// cut-off: ≤ π/ω_up.
+    /// cut-off (≤ π/ω_up), be at least 1 ms, and keep the generation transform within 2²² points
+    /// (2πN/(ω_up·step) ≤ 4 194 304).
+    #[schema(minimum = 0.001)]
     pub field_generation_step_s: f64,
 }
 
@@ -52,7 +64,22 @@ impl Default for WindSite {
     }
 }
 
+/// Largest cut-off frequency (rad/s): ten times the 2π rad/s above which the wind has no energy.
+pub const MAX_CUTOFF_RAD_S: f64 = 60.0;
+/// Finest generation step (s): the cubic interpolation to the storm grid makes a finer generation
+/// grid than the storm's own pointless, and 1 ms resolves 500 Hz.
+pub const MIN_GENERATION_STEP_S: f64 = 1e-3;
+/// Largest transform the generation may use: its buffers (about 3·8 bytes a point) are kept per
+/// thread, so 2²² points hold about 100 MB per thread.
+pub const MAX_GENERATION_TRANSFORM: f64 = 4_194_304.0;
+
 impl WindSite {
+    /// Points of the transform a storm is generated with, before rounding to a fast length:
+    /// 2π/(Δω·Δt_g) = 2πN/(ω_up·Δt_g).
+    pub fn generation_transform_points(&self) -> f64 {
+        2.0 * PI * self.frequencies as f64 / (self.cutoff_rad_s * self.field_generation_step_s)
+    }
+
     pub fn validate(&self) -> Result<()> {
         require_positive("wind.site_roughness_m", self.site_roughness_m)?;
         require_positive("wind.station_roughness_m", self.station_roughness_m)?;
@@ -66,6 +93,12 @@ impl WindSite {
         require_positive("wind.air_density_kg_m3", self.air_density_kg_m3)?;
         require_positive("wind.pressure_coefficient", self.pressure_coefficient)?;
         require_positive("wind.cutoff_rad_s", self.cutoff_rad_s)?;
+        if self.cutoff_rad_s > MAX_CUTOFF_RAD_S {
+            return Err(Error::invalid(
+                "wind.cutoff_rad_s",
+                format!("must be at most {MAX_CUTOFF_RAD_S} rad/s, got {}", self.cutoff_rad_s),
+            ));
+        }
         if !(16..=1 << 16).contains(&self.frequencies) {
             return Err(Error::invalid(
                 "wind.frequencies",
@@ -73,10 +106,26 @@ impl WindSite {
             ));
         }
         require_positive("wind.field_generation_step_s", self.field_generation_step_s)?;
+        if self.field_generation_step_s < MIN_GENERATION_STEP_S {
+            return Err(Error::invalid(
+                "wind.field_generation_step_s",
+                format!("must be at least {MIN_GENERATION_STEP_S} s, got {}", self.field_generation_step_s),
+            ));
+        }
         if self.field_generation_step_s > PI / self.cutoff_rad_s {
             return Err(Error::invalid(
                 "wind.field_generation_step_s",
                 format!("must resolve the cut-off frequency: at most π/ω_up = {:.4} s", PI / self.cutoff_rad_s),
+            ));
+        }
+        let points = self.generation_transform_points();
+        if points > MAX_GENERATION_TRANSFORM {
+            return Err(Error::invalid(
+                "wind.field_generation_step_s",
+                format!(
+                    "a generation transform of 2πN/(ω_up·step) = {points:.0} points exceeds {MAX_GENERATION_TRANSFORM}; \
+                     raise the step or the cut-off, or lower wind.frequencies"
+                ),
             ));
         }
         Ok(())

@@ -90,10 +90,19 @@ async fn delete_metamodel(State(state): State<AppState>, Path(id): Path<String>)
     Ok(StatusCode::NO_CONTENT)
 }
 
-/// A stored metamodel and its rebuilt study, cached by id.
+/// A stored metamodel and its rebuilt study, cached by id. A cached one is still looked up in the
+/// store (one indexed read), so a delete through another replica is seen at once.
 pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, ApiError> {
-    if let Some(found) = state.loaded.lock().expect("cache lock").get(id) {
-        return Ok(found.clone());
+    let (cached, generation) = {
+        let mut loaded = state.loaded.lock().expect("cache lock");
+        (loaded.get(id), loaded.generation())
+    };
+    if let Some(found) = cached {
+        if state.store.metamodel_exists(id).await? {
+            return Ok(found);
+        }
+        state.loaded.lock().expect("cache lock").remove(id);
+        return Err(ApiError::not_found("metamodel", id));
     }
     let body = state.store.metamodel_body(id).await?.ok_or_else(|| ApiError::not_found("metamodel", id))?;
     let loaded = tokio::task::spawn_blocking(move || -> crate::error::Result<(Metamodel, Problem)> {
@@ -104,7 +113,7 @@ pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, 
     .await
     .map_err(ApiError::internal)??;
     let loaded = Arc::new(loaded);
-    state.loaded.lock().expect("cache lock").insert(id.to_string(), loaded.clone());
+    state.loaded.lock().expect("cache lock").insert(id, loaded.clone(), generation);
     Ok(loaded)
 }
 

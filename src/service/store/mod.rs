@@ -363,6 +363,11 @@ impl Store {
         row.map(|r| r.try_get("body")).transpose()
     }
 
+    pub async fn metamodel_exists(&self, id: &str) -> Result<bool, sqlx::Error> {
+        let row = sqlx::query("SELECT id FROM metamodels WHERE id = $1").bind(id).fetch_optional(&self.pool).await?;
+        Ok(row.is_some())
+    }
+
     pub async fn metamodels(&self, limit: i64, offset: i64) -> Result<Vec<MetamodelRow>, sqlx::Error> {
         let rows = sqlx::query(
             "SELECT id, job_id, preset, created_at FROM metamodels ORDER BY created_at DESC, id LIMIT $1 OFFSET $2",
