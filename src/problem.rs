@@ -129,6 +129,10 @@ fn default_inputs(structure: &Structure, damper_scale: f64) -> InputModel {
     InputModel { inputs }
 }
 
+/// Most modes a study retains: the modal wind costs the square of the modes per storm and the
+/// coupled NARX dictionaries grow with them; the paper's building needs three.
+pub const MAX_MODES: usize = 10;
+
 /// Every physical input is non-negative; these must also stay away from zero.
 const POSITIVE_INPUTS: [&str; 3] = ["youngs_modulus", "mass_factor", "wind_speed"];
 
@@ -180,6 +184,9 @@ impl Problem {
             check_admissible(input)?;
         }
         let modes_count = spec.modes.unwrap_or(3);
+        if modes_count > MAX_MODES {
+            return Err(Error::invalid("modes", format!("must be at most {MAX_MODES}, got {modes_count}")));
+        }
         let modes = Modes::of(&structure, modes_count)?;
         let all_modes = Modes::of(&structure, structure.floors())?;
         let site = spec.wind.clone().unwrap_or_default();
@@ -190,6 +197,18 @@ impl Problem {
             return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {damper_exponent}")));
         }
         let storm = StormGrid::new(spec.duration_s.unwrap_or(900.0), spec.time_step_s.unwrap_or(0.01), &site)?;
+        // The modal forces are simulated as a process of as many components as modes, whose period
+        // 2πn/Δω is the shortest of any path: a longer storm would repeat itself.
+        let period = wind.grid().period(modes_count);
+        if storm.duration > period {
+            return Err(Error::invalid(
+                "duration_s",
+                format!(
+                    "{} s is longer than the period of the simulated wind ({period:.0} s); raise wind.frequencies",
+                    storm.duration
+                ),
+            ));
+        }
         Ok(Problem {
             name,
             spec: spec.clone(),

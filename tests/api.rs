@@ -50,6 +50,7 @@ async fn spawn_app_configured(db: &std::path::Path, adjust: impl FnOnce(&mut Ser
         max_queued_jobs: 100,
         max_experiments: 400,
         lease_ms: 2_000,
+        ..ServeArgs::default()
     };
     adjust(&mut args);
     let app = Application::build(args).await.expect("the app builds");
@@ -527,6 +528,7 @@ async fn every_documented_status_is_real() {
     let app = spawn_app_configured(&db, |args| {
         args.api_keys = vec![KEY.into()];
         args.max_queued_jobs = 1;
+        args.max_event_streams = 1;
     })
     .await;
     let spec: Value =
@@ -538,6 +540,8 @@ async fn every_documented_status_is_real() {
     let ids = Ids { metamodel, doomed_metamodel, operation };
     let documented = documented_statuses(&spec);
     eprintln!("provoking {} documented (operation, status) pairs", documented.len());
+    // The event stream held open in the full phase, so that the only stream allowed is taken.
+    let mut held_stream = None;
     for phase in [Phase::Normal, Phase::QueueFull, Phase::DatabaseBroken] {
         match phase {
             Phase::Normal => {}
@@ -546,17 +550,26 @@ async fn every_documented_status_is_real() {
                 // One long calibration runs on the single worker, the next waits: the queue is full.
                 let url = format!("{}/v1/calibrations", app.address);
                 let mut full = false;
+                let mut running = None;
                 for _ in 0..20 {
                     let r = app.client.post(&url).bearer_auth(KEY).json(&json!({"experiments": 200})).send().await;
-                    full = r.unwrap().status() == 503;
+                    let r = r.unwrap();
+                    full = r.status() == 503;
                     if full {
                         break;
                     }
+                    let op: Value = r.json().await.unwrap();
+                    running.get_or_insert(op["id"].as_str().unwrap().to_string());
                     tokio::time::sleep(Duration::from_millis(300)).await;
                 }
                 assert!(full, "the queue never filled");
+                let events = format!("{}/v1/operations/{}/events", app.address, running.unwrap());
+                let stream = app.client.get(events).bearer_auth(KEY).send().await.unwrap();
+                assert_eq!(stream.status().as_u16(), 200);
+                held_stream = Some(stream);
             }
             Phase::DatabaseBroken => {
+                held_stream.take();
                 drain_operations(&app).await;
                 let pool = sqlx::SqlitePool::connect(&format!("sqlite://{}", db.display())).await.unwrap();
                 for statement in

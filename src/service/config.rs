@@ -102,6 +102,12 @@ impl ServeArgs {
         }
     }
 
+    /// Idempotency keys recorded before this instant (epoch ms) have expired.
+    pub fn idempotency_keys_since_ms(&self) -> i64 {
+        let ttl_ms = self.idempotency_ttl_h.saturating_mul(3_600_000).min(i64::MAX as u64) as i64;
+        super::store::now_ms().saturating_sub(ttl_ms)
+    }
+
     /// Settings that cannot work are refused before anything starts.
     pub fn check(&self) -> Result<()> {
         if self.workers == 0 && self.role != Role::Api {

@@ -2,13 +2,18 @@
 //! shared by the synchronous route and the worker that runs large requests as operations.
 
 use super::ServeArgs;
+use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
+use crate::analysis::exceedance_svg;
 use crate::analysis::{Response, automatic_thresholds, check_confidence, exceedance_curve, metamodel_peaks};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, require_finite};
 use crate::problem::Problem;
-use crate::surrogate::{Metamodel, Observer};
+use crate::structure::MAX_FLOORS;
+use crate::surrogate::{Metamodel, Observer, Progress};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use utoipa::ToSchema;
 
 /// Which response's peak the curve is of.
@@ -26,18 +31,22 @@ pub enum ResponseKind {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(default, deny_unknown_fields)]
 pub struct ExceedanceRequest {
-    /// Monte Carlo samples (storms) drawn from the input model.
-    #[schema(minimum = 1, default = 1000)]
+    /// Monte Carlo samples (storms) drawn from the input model; at most the server's
+    /// `--max-samples` (20 000 by default).
+    #[schema(minimum = 1, maximum = 1000000, default = 1000)]
     pub samples: usize,
     #[schema(default = 1)]
     pub seed: u64,
-    /// Floor (1-based); the roof when absent.
-    #[schema(minimum = 1)]
+    /// Floor (1-based, at most the structure's floors); the roof when absent.
+    #[schema(minimum = 1, maximum = 200)]
     pub floor: Option<usize>,
     pub response: ResponseKind,
-    /// Peak values (m) at which to evaluate the curve; 50 evenly spread over the sampled peaks when absent.
+    /// Peak values (m, 0 to 1000) at which to evaluate the curve; 50 evenly spread over the sampled
+    /// peaks when absent.
+    #[schema(schema_with = thresholds_schema)]
     pub thresholds: Option<Vec<f64>>,
     /// Inputs held fixed, by name (e.g. `{"wind_speed": 40}`), each inside its marginal's support.
+    #[schema(schema_with = fixed_inputs_schema)]
     pub fixed: BTreeMap<String, f64>,
     /// Level of the Clopper-Pearson band, in (0, 1).
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
@@ -60,6 +69,9 @@ impl Default for ExceedanceRequest {
 
 /// Most thresholds a request may list.
 const MAX_THRESHOLDS: usize = 10_000;
+/// Largest threshold (m): peaks are absolute values, so thresholds are non-negative, and no
+/// building's displacement or drift comes near a kilometre.
+const MAX_THRESHOLD_M: f64 = 1000.0;
 
 impl ExceedanceRequest {
     /// The checks that need no metamodel; errors name the field.
@@ -69,9 +81,20 @@ impl ExceedanceRequest {
         }
         check_confidence(self.confidence)?;
         if let Some(t) = &self.thresholds
-            && (t.is_empty() || t.len() > MAX_THRESHOLDS || t.iter().any(|x| !x.is_finite()))
+            && (t.is_empty() || t.len() > MAX_THRESHOLDS || t.iter().any(|x| !(0.0..=MAX_THRESHOLD_M).contains(x)))
         {
-            return Err(Error::invalid("thresholds", format!("must be 1 to {MAX_THRESHOLDS} finite numbers")));
+            return Err(Error::invalid(
+                "thresholds",
+                format!("must be 1 to {MAX_THRESHOLDS} numbers between 0 and {MAX_THRESHOLD_M} m"),
+            ));
+        }
+        if let Some(floor) = self.floor
+            && !(1..=MAX_FLOORS).contains(&floor)
+        {
+            return Err(Error::invalid("floor", format!("must be between 1 and {MAX_FLOORS}, got {floor}")));
+        }
+        for (name, value) in &self.fixed {
+            require_finite(&format!("fixed.{name}"), *value)?;
         }
         Ok(())
     }
@@ -110,6 +133,81 @@ pub struct ExceedanceAnswer {
     pub curve: ExceedanceCurve,
     pub response: Response,
     pub metamodel_id: String,
+}
+
+/// How a synchronous answer is sent, by `Accept`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rendering {
+    Json,
+    Csv,
+    Svg,
+}
+
+impl Rendering {
+    pub fn from_accept(accept: &str) -> Rendering {
+        if accept.contains("text/csv") {
+            Rendering::Csv
+        } else if accept.contains("image/svg+xml") {
+            Rendering::Svg
+        } else {
+            Rendering::Json
+        }
+    }
+
+    /// The content type and the body (blocking: an SVG of a long curve takes milliseconds).
+    pub fn render(self, answer: &ExceedanceAnswer) -> (&'static str, String) {
+        let curve = &answer.curve;
+        match self {
+            Rendering::Json => ("application/json", serde_json::to_string(answer).expect("a curve serialises")),
+            Rendering::Csv => {
+                let mut text = String::from("threshold_m,probability,lower,upper\n");
+                for i in 0..curve.thresholds.len() {
+                    let row = [curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]];
+                    text += &format!("{},{},{},{}\n", row[0], row[1], row[2], row[3]);
+                }
+                ("text/csv", text)
+            }
+            Rendering::Svg => {
+                let label = format!("peak {:?} x (m)", answer.response);
+                ("image/svg+xml", exceedance_svg(&[("PC-NARX", curve)], &label))
+            }
+        }
+    }
+}
+
+/// What stops a synchronous request's sampling: the client went away or the request timed out
+/// (`stop`), or the server is shutting down (`draining`). The sampling checks it between batches
+/// of a few storms, about every millisecond.
+pub struct RequestWatch {
+    stop: AtomicBool,
+    draining: Arc<AtomicBool>,
+}
+
+impl RequestWatch {
+    pub fn new(draining: Arc<AtomicBool>) -> Self {
+        RequestWatch { stop: AtomicBool::new(false), draining }
+    }
+
+    pub fn stop(&self) {
+        self.stop.store(true, Ordering::Relaxed);
+    }
+}
+
+impl Observer for RequestWatch {
+    fn progress(&self, _: Progress) {}
+    fn cancelled(&self) -> bool {
+        self.stop.load(Ordering::Relaxed) || self.draining.load(Ordering::Relaxed)
+    }
+}
+
+/// Stops the watched work when dropped: axum drops a handler's future when its client
+/// disconnects, and with it this guard.
+pub struct StopOnDrop(pub Arc<RequestWatch>);
+
+impl Drop for StopOnDrop {
+    fn drop(&mut self) {
+        self.0.stop();
+    }
 }
 
 /// A large exceedance request as queued.

@@ -9,6 +9,7 @@
 //! new jobs. Validations and exceedance requests run whole on the worker that claimed them.
 
 use super::exceedance::{ExceedanceAnswer, ExceedanceJob};
+use super::lease::LeaseKeeper;
 use super::store::{Store, TaskRow};
 use super::{AppState, CalibrationRequest, ValidationJob};
 use crate::analysis::{ValidationReport, validate};
@@ -111,31 +112,41 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
         fit_experiments(&problem, &options, &request.plan, &request.experiments, 0, observer.as_ref())
     });
     let mut ticker = tokio::time::interval(Duration::from_secs(1));
+    let mut lease = LeaseKeeper::claimed(state.config.lease_ms);
     let result = loop {
         tokio::select! {
             result = &mut work => break result,
             _ = ticker.tick() => {
-                let wanted = store.heartbeat_task(&job_id, chunk, owner, state.config.lease_ms).await;
-                let stop = !matches!(wanted, Ok(Some(true)) | Err(_))
-                    || state.draining.load(Ordering::Relaxed)
-                    || parent.is_some_and(|p| p.cancelled());
+                let mut stop = state.draining.load(Ordering::Relaxed) || parent.is_some_and(|p| p.cancelled());
+                if lease.due() {
+                    match store.heartbeat_task(&job_id, chunk, owner, state.config.lease_ms).await {
+                        Ok(Some(true)) => lease.renewed(),
+                        // The task was withdrawn (its job cancelled) or taken by another worker.
+                        Ok(_) => stop = true,
+                        Err(error) => {
+                            tracing::warn!(%error, job = %job_id, chunk, "renewing a task's lease failed");
+                            stop |= !lease.failed();
+                        }
+                    }
+                }
                 if stop {
                     shared.cancel.store(true, Ordering::Relaxed);
                 }
             }
         }
     };
-    let recorded = match result {
-        Ok(Ok(fits)) => {
-            let text = serde_json::to_string(&fits).expect("fits serialise");
-            store.finish_task(&job_id, chunk, owner, "done", &text).await.map(|_| ())
-        }
-        Ok(Err(Error::Cancelled)) => store.release_task(&job_id, chunk, owner).await,
-        Ok(Err(error)) => store.finish_task(&job_id, chunk, owner, "failed", &error.to_string()).await.map(|_| ()),
-        Err(panic) => {
-            let reason = format!("the task panicked: {panic}");
-            store.finish_task(&job_id, chunk, owner, "failed", &reason).await.map(|_| ())
-        }
+    let (finished, text) = match result {
+        Ok(Ok(fits)) => (Some("done"), serde_json::to_string(&fits).expect("fits serialise")),
+        Ok(Err(Error::Cancelled)) => (None, String::new()),
+        Ok(Err(error)) => (Some("failed"), error.to_string()),
+        Err(panic) => (Some("failed"), format!("the task panicked: {panic}")),
+    };
+    let recorded = match finished {
+        Some(outcome) => lease
+            .persist("a task's outcome", || store.finish_task(&job_id, chunk, owner, outcome, &text))
+            .await
+            .map(|_| ()),
+        None => lease.persist("releasing a task", || store.release_task(&job_id, chunk, owner)).await,
     };
     if let Err(error) = recorded {
         tracing::error!(%error, job = %job_id, chunk, "recording a task failed");
@@ -163,9 +174,12 @@ async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Problem
         .await
         .map_err(|e| Error::Internal(format!("database: {e}")))?
         .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
-    let metamodel = Metamodel::from_json(&body)?;
-    let problem = metamodel.problem()?;
-    Ok((metamodel, problem))
+    blocking(move || {
+        let metamodel = Metamodel::from_json(&body)?;
+        let problem = metamodel.problem()?;
+        Ok((metamodel, problem))
+    })
+    .await
 }
 
 fn parse<T: serde::de::DeserializeOwned>(request: &str) -> Result<T> {
@@ -184,7 +198,8 @@ async fn prepare(
     match kind {
         "calibration" => {
             let request: CalibrationRequest = parse(request)?;
-            let (problem, options) = request.resolve(&state.config)?;
+            let (checked, config) = (request.clone(), state.config.clone());
+            let (problem, options) = blocking(move || checked.resolve(&config)).await?;
             let work = coordinate(state.clone(), id.to_string(), owner.to_string(), request, problem, options, shared);
             Ok(Box::pin(work))
         }
@@ -208,6 +223,25 @@ async fn prepare(
     }
 }
 
+/// A database call of a running job, tried again every second through transient faults until it
+/// answers or the job is cancelled: the job's heartbeat cancels it when the lease is lost.
+async fn through_faults<T, F: Future<Output = std::result::Result<T, sqlx::Error>>>(
+    shared: &Shared,
+    what: &str,
+    mut call: impl FnMut() -> F,
+) -> Result<T> {
+    loop {
+        match call().await {
+            Ok(value) => return Ok(value),
+            Err(_) if shared.cancelled() => return Err(Error::Cancelled),
+            Err(error) => {
+                tracing::warn!(%error, what, "a database call failed; trying again");
+                tokio::time::sleep(Duration::from_secs(1)).await;
+            }
+        }
+    }
+}
+
 /// A calibration spread over the replicas (see the module's description).
 async fn coordinate(
     state: AppState,
@@ -218,7 +252,6 @@ async fn coordinate(
     options: CalibrationOptions,
     shared: Arc<Shared>,
 ) -> Result<(Output, String)> {
-    let database = |e: sqlx::Error| Error::Internal(format!("database: {e}"));
     let problem = Arc::new(problem);
     let options = Arc::new(options);
     let planned = {
@@ -238,7 +271,8 @@ async fn coordinate(
             serde_json::to_string(&task).expect("a task serialises")
         })
         .collect();
-    state.store.insert_tasks(&id, &tasks).await.map_err(database)?;
+    let store = &state.store;
+    through_faults(&shared, "queueing tasks", || store.insert_tasks(&id, &tasks)).await?;
     state.wake.notify_waiters();
     let mut fits = {
         let (planned, options, shared) = (planned.clone(), options.clone(), shared.clone());
@@ -249,7 +283,7 @@ async fn coordinate(
         if shared.cancelled() {
             return Err(Error::Cancelled);
         }
-        let tally = state.store.task_tally(&id).await.map_err(database)?;
+        let tally = through_faults(&shared, "counting tasks", || store.task_tally(&id)).await?;
         if let Some(reason) = tally.failure {
             return Err(Error::Numerical(reason));
         }
@@ -258,12 +292,14 @@ async fn coordinate(
         if tally.done == tally.total {
             break;
         }
-        match state.store.claim_task(&owner, state.config.lease_ms, Some(&id)).await.map_err(database)? {
+        let claimed =
+            through_faults(&shared, "claiming a task", || store.claim_task(&owner, state.config.lease_ms, Some(&id)));
+        match claimed.await? {
             Some(task) => run_task(&state, &owner, task, Some(&shared)).await,
             None => tokio::time::sleep(Duration::from_millis(250)).await,
         }
     }
-    for text in state.store.task_results(&id).await.map_err(database)? {
+    for text in through_faults(&shared, "reading task results", || store.task_results(&id)).await? {
         let chunk: Vec<ExperimentFit> =
             serde_json::from_str(&text).map_err(|e| Error::Internal(format!("a stored task result: {e}")))?;
         fits.extend(chunk);
@@ -277,10 +313,12 @@ async fn coordinate(
 async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: String) {
     let store: &Store = &state.store;
     let shared = Arc::new(Shared::default());
+    let mut lease = LeaseKeeper::claimed(state.config.lease_ms);
     let mut work = match prepare(state, &id, owner, kind, &request, shared.clone()).await {
         Ok(work) => work,
         Err(error) => {
-            let _ = store.finish(&id, owner, "failed", Some(&error.to_string()), None).await;
+            let reason = error.to_string();
+            let _ = lease.persist("a failure", || store.finish(&id, owner, "failed", Some(&reason), None)).await;
             return;
         }
     };
@@ -290,12 +328,24 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         tokio::select! {
             result = &mut work => break result,
             _ = ticker.tick() => {
-                let progress = shared.progress.lock().expect("progress lock").clone();
-                let text = progress.map(|p| serde_json::to_string(&p).expect("progress serialises"));
-                match store.heartbeat(&id, owner, state.config.lease_ms, text.as_deref()).await {
-                    Ok(Some(cancel)) => if cancel { shared.cancel.store(true, Ordering::Relaxed) },
-                    Ok(None) => shared.cancel.store(true, Ordering::Relaxed), // lease lost: stop, discard
-                    Err(error) => tracing::warn!(%error, "heartbeat failed"),
+                if lease.due() {
+                    let progress = shared.progress.lock().expect("progress lock").clone();
+                    let text = progress.map(|p| serde_json::to_string(&p).expect("progress serialises"));
+                    match store.heartbeat(&id, owner, state.config.lease_ms, text.as_deref()).await {
+                        Ok(Some(cancel)) => {
+                            lease.renewed();
+                            if cancel {
+                                shared.cancel.store(true, Ordering::Relaxed);
+                            }
+                        }
+                        Ok(None) => shared.cancel.store(true, Ordering::Relaxed), // lease lost: stop, discard
+                        Err(error) => {
+                            tracing::warn!(%error, job = %id, "renewing a job's lease failed");
+                            if !lease.failed() {
+                                shared.cancel.store(true, Ordering::Relaxed);
+                            }
+                        }
+                    }
                 }
                 if state.draining.load(Ordering::Relaxed) {
                     shared.cancel.store(true, Ordering::Relaxed);
@@ -307,19 +357,26 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         Ok((Output::Metamodel(metamodel), preset)) => {
             let metamodel_id = uuid::Uuid::new_v4().to_string();
             let body = serde_json::to_string(&metamodel).expect("a metamodel serialises");
-            store.complete(&id, owner, &metamodel_id, &preset, &body).await.map(|_| ())
+            lease.persist("a metamodel", || store.complete(&id, owner, &metamodel_id, &preset, &body)).await.map(|_| ())
         }
         Ok((Output::Report(report), _)) => {
             let body = serde_json::to_string(&report).expect("a report serialises");
-            store.finish(&id, owner, "succeeded", None, Some(&body)).await.map(|_| ())
+            lease.persist("a report", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
         }
         Ok((Output::Curve(curve), _)) => {
             let body = serde_json::to_string(&curve).expect("a curve serialises");
-            store.finish(&id, owner, "succeeded", None, Some(&body)).await.map(|_| ())
+            lease.persist("a curve", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
         }
-        Err(Error::Cancelled) if state.draining.load(Ordering::Relaxed) => store.release(&id, owner).await,
-        Err(Error::Cancelled) => store.finish(&id, owner, "cancelled", None, None).await.map(|_| ()),
-        Err(error) => store.finish(&id, owner, "failed", Some(&error.to_string()), None).await.map(|_| ()),
+        Err(Error::Cancelled) if state.draining.load(Ordering::Relaxed) => {
+            lease.persist("releasing a job", || store.release(&id, owner)).await
+        }
+        Err(Error::Cancelled) => {
+            lease.persist("a cancellation", || store.finish(&id, owner, "cancelled", None, None)).await.map(|_| ())
+        }
+        Err(error) => {
+            let reason = error.to_string();
+            lease.persist("a failure", || store.finish(&id, owner, "failed", Some(&reason), None)).await.map(|_| ())
+        }
     };
     if let Err(error) = outcome {
         tracing::error!(%error, job = %id, "recording the outcome failed");

@@ -6,7 +6,9 @@ mod config;
 mod error;
 mod exceedance;
 mod jobs;
+mod lease;
 mod routes;
+mod schema;
 mod store;
 
 pub use config::{Role, ServeArgs};
@@ -57,25 +59,31 @@ pub struct AppState {
 #[serde(default, deny_unknown_fields)]
 pub struct CalibrationRequest {
     /// A built-in study (`GET /v1/presets`); `frame40-kn` when neither this nor `structure` is given.
-    #[schema(example = "frame40-kn")]
+    #[schema(example = "frame40-kn", pattern = "^(frame40|frame40-kn)$")]
     pub preset: Option<String>,
     /// A structure of your own instead of a preset.
     pub structure: Option<CustomStructure>,
     /// Marginals replacing the preset's, by input name (`youngs_modulus`, `mass_factor`,
     /// `damping_ratio`, `damper_c1` … `damper_c4`, `wind_speed`).
+    #[schema(schema_with = schema::marginals_schema)]
     pub inputs: BTreeMap<String, Marginal>,
     pub wind: Option<WindSite>,
     /// Exponent α of the nonlinear viscous dampers, F = c·|v|^α·sign(v).
+    #[schema(exclusive_minimum = 0, maximum = 2)]
     pub damper_exponent: Option<f64>,
-    /// Modes kept in the reduced model (3 in the paper).
-    #[schema(minimum = 1)]
+    /// Modes kept in the reduced model (3 in the paper), at most 10 and the structure's floors.
+    #[schema(minimum = 1, maximum = 10)]
     pub modes: Option<usize>,
-    /// Storm length (s); 900 in the paper.
+    /// Storm length (s); 900 in the paper, at most a day. With the time step it sets the steps per
+    /// storm (at most 10⁷), which with the experiments are checked against the server's budget.
+    #[schema(exclusive_minimum = 0, maximum = 86400)]
     pub duration_s: Option<f64>,
-    /// Time step (s); 0.01 in the paper.
+    /// Time step (s); 0.01 in the paper, at least 0.1 ms, at most π/ω_up and the duration.
+    #[schema(minimum = 0.0001)]
     pub time_step_s: Option<f64>,
-    /// Reference runs on the Latin hypercube (K; 200 in the paper).
-    #[schema(minimum = 4)]
+    /// Reference runs on the Latin hypercube (K; 200 in the paper), at most the server's
+    /// `--max-experiments` (1000 by default).
+    #[schema(minimum = 4, maximum = 5000)]
     pub experiments: Option<usize>,
     pub seed: Option<u64>,
     pub narx: Option<crate::surrogate::narx::NarxOptions>,
@@ -192,6 +200,7 @@ impl Application {
             Role::Api => Vec::new(),
             Role::All | Role::Worker => jobs::spawn_workers(self.state.clone(), self.state.config.workers),
         };
+        let upkeep = tokio::spawn(prune_idempotency_keys(self.state.clone()));
         let draining = self.state.draining.clone();
         let app = routes::router(self.state.clone());
         axum::serve(self.listener, app)
@@ -201,10 +210,28 @@ impl Application {
             })
             .await?;
         self.state.draining.store(true, Ordering::Relaxed);
+        upkeep.abort();
         for worker in workers {
             let _ = worker.await;
         }
         Ok(())
+    }
+}
+
+/// How often expired idempotency keys are deleted.
+const PRUNE_INTERVAL: std::time::Duration = std::time::Duration::from_secs(600);
+
+/// Deletes expired idempotency keys now and every [`PRUNE_INTERVAL`] (expired keys are already
+/// ignored when looked up; this keeps the table from growing).
+async fn prune_idempotency_keys(state: AppState) {
+    let mut ticker = tokio::time::interval(PRUNE_INTERVAL);
+    loop {
+        ticker.tick().await;
+        match state.store.prune_idempotency(state.config.idempotency_keys_since_ms()).await {
+            Ok(0) => {}
+            Ok(pruned) => tracing::info!(pruned, "expired idempotency keys deleted"),
+            Err(error) => tracing::warn!(%error, "pruning idempotency keys failed"),
+        }
     }
 }
 

@@ -10,7 +10,7 @@ mod modes;
 mod presets;
 mod sections;
 
-pub use custom::CustomStructure;
+pub use custom::{CustomStructure, MAX_DAMPER_GROUPS, MAX_FLOORS};
 pub use frame::{FrameSpec, StoreySections};
 pub use modes::Modes;
 pub use presets::{FRAME40_YOUNGS_MODULUS, frame40};

@@ -74,7 +74,7 @@ impl WindLoads {
         FieldSpectrum::new(&self.site, &self.heights, wind_speed)
     }
 
-    pub(super) fn grid(&self) -> SpectralGrid {
+    pub fn grid(&self) -> SpectralGrid {
         SpectralGrid { lines: self.site.frequencies, cutoff: self.site.cutoff_rad_s }
     }
 

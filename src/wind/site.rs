@@ -155,6 +155,8 @@ pub struct StormGrid {
 pub const MAX_DURATION_S: f64 = 86_400.0;
 /// Ten million instants per storm at most (80 MB per series).
 pub const MAX_STEPS: usize = 10_000_000;
+/// Finest time step (s): 10 kHz, a hundred times the paper's rate.
+pub const MIN_TIME_STEP_S: f64 = 1e-4;
 
 impl StormGrid {
     /// Checks the grid against itself and against the wind discretisation it must be simulated on.
@@ -163,6 +165,12 @@ impl StormGrid {
         require_positive("time_step_s", time_step)?;
         if duration > MAX_DURATION_S {
             return Err(Error::invalid("duration_s", format!("at most {MAX_DURATION_S} s (one day), got {duration}")));
+        }
+        if time_step < MIN_TIME_STEP_S {
+            return Err(Error::invalid(
+                "time_step_s",
+                format!("must be at least {MIN_TIME_STEP_S} s, got {time_step}"),
+            ));
         }
         if time_step > PI / site.cutoff_rad_s {
             return Err(Error::invalid(

@@ -31,7 +31,9 @@ async fn start_calibration(
     headers: HeaderMap,
     ApiJson(request): ApiJson<CalibrationRequest>,
 ) -> Result<Response, ApiError> {
-    request.resolve(&state.config)?;
+    // Resolving builds the study (an eigen-analysis, a spectral table): off the runtime.
+    let (checked, config) = (request.clone(), state.config.clone());
+    tokio::task::spawn_blocking(move || checked.resolve(&config).map(|_| ())).await.map_err(ApiError::internal)??;
     let text = serde_json::to_string(&request).expect("a request serialises");
     accept_job(&state, &headers, "calibrations", OperationKind::Calibration, text).await
 }

@@ -1,19 +1,24 @@
 //! Stored metamodels, and the exceedance curves sampled from them.
 
 use super::{ApiJson, ApiQuery, Page, accept_job};
-use crate::analysis::exceedance_svg;
 use crate::problem::Problem;
 use crate::service::error::{ApiError, ProblemDetails};
-use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
+use crate::service::exceedance::{
+    ExceedanceAnswer, ExceedanceJob, ExceedanceRequest, Rendering, RequestWatch, StopOnDrop,
+};
 use crate::service::routes::operations::{Operation, OperationKind};
 use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
-use crate::surrogate::{Metamodel, Silent};
+use crate::surrogate::Metamodel;
 use axum::Json;
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response as HttpResponse};
 use serde::Serialize;
 use std::sync::Arc;
+use std::time::Duration;
+
+/// Seconds a client should wait before offering a synchronous request again.
+const BUSY_RETRY_S: u64 = 1;
 use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
@@ -146,7 +151,7 @@ fn prefers_async(headers: &HeaderMap) -> bool {
             headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
         (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
         (status = 422, description = "A field is invalid (named in `errors`), or a sample diverged", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "The queue is full (asynchronous requests)", body = ProblemDetails, content_type = "application/problem+json",
+        (status = 503, description = "The queue is full (asynchronous requests), every synchronous sampling slot is taken, the request was not answered within the server's timeout, or the server is shutting down", body = ProblemDetails, content_type = "application/problem+json",
             headers(("Retry-After" = u64, description = "Seconds before trying again"))),
     ))]
 async fn exceedance_curve(
@@ -162,27 +167,48 @@ async fn exceedance_curve(
         let text = serde_json::to_string(&job).expect("a job serialises");
         return accept_job(&state, &headers, "exceedance", OperationKind::Exceedance, text).await;
     }
-    let accept = headers.get(header::ACCEPT).and_then(|v| v.to_str().ok()).unwrap_or("application/json").to_string();
-    let answer = tokio::task::spawn_blocking(move || {
-        let (metamodel, problem) = loaded.as_ref();
-        request.answer(metamodel, problem, &id, &Silent)
-    })
-    .await
-    .map_err(ApiError::internal)??;
-    let curve = &answer.curve;
-    if accept.contains("text/csv") {
-        let mut text = String::from("threshold_m,probability,lower,upper\n");
-        for i in 0..curve.thresholds.len() {
-            text +=
-                &format!("{},{},{},{}\n", curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]);
+    let slots = state.config.sync_request_slots();
+    let permit = state.sampling.clone().try_acquire_owned().map_err(|_| {
+        ApiError::unavailable(
+            format!("{slots} exceedance requests are being sampled; retry, or send `Prefer: respond-async`"),
+            BUSY_RETRY_S,
+        )
+    })?;
+    let accept = headers.get(header::ACCEPT).and_then(|v| v.to_str().ok()).unwrap_or("application/json");
+    let rendering = Rendering::from_accept(accept);
+    let watch = Arc::new(RequestWatch::new(state.draining.clone()));
+    let _stop_when_the_client_leaves = StopOnDrop(watch.clone());
+    let work = {
+        let watch = watch.clone();
+        tokio::task::spawn_blocking(move || {
+            // Held until the sampling has stopped, whatever became of the request.
+            let _permit = permit;
+            let (metamodel, problem) = loaded.as_ref();
+            let answer = request.answer(metamodel, problem, &id, watch.as_ref())?;
+            Ok::<_, crate::error::Error>(rendering.render(&answer))
+        })
+    };
+    let timeout = Duration::from_secs(state.config.sync_timeout_s);
+    let (content_type, body) = match tokio::time::timeout(timeout, work).await {
+        Ok(joined) => match joined.map_err(ApiError::internal)? {
+            Ok(rendered) => rendered,
+            Err(crate::error::Error::Cancelled) => {
+                return Err(ApiError::unavailable("the server is shutting down", BUSY_RETRY_S));
+            }
+            Err(error) => return Err(error.into()),
+        },
+        Err(_) => {
+            watch.stop();
+            return Err(ApiError::unavailable(
+                format!(
+                    "not answered within {} s; ask for fewer samples or send `Prefer: respond-async`",
+                    timeout.as_secs()
+                ),
+                BUSY_RETRY_S,
+            ));
         }
-        return Ok(([(header::CONTENT_TYPE, "text/csv")], text).into_response());
-    }
-    if accept.contains("image/svg+xml") {
-        let svg = exceedance_svg(&[("PC-NARX", curve)], &format!("peak {:?} x (m)", answer.response));
-        return Ok(([(header::CONTENT_TYPE, "image/svg+xml")], svg).into_response());
-    }
-    Ok(Json(answer).into_response())
+    };
+    Ok(([(header::CONTENT_TYPE, content_type)], body).into_response())
 }
 
 /// Validates the metamodel against the reference model on fresh samples, as an operation whose
@@ -212,8 +238,17 @@ async fn start_validation(
             crate::error::Error::invalid("samples", format!("must be between 2 and {MAX_VALIDATION_SAMPLES}")).into()
         );
     }
-    if state.store.metamodel_body(&id).await?.is_none() {
-        return Err(ApiError::not_found("metamodel", &id));
+    let loaded = load(&state, &id).await?;
+    let storm_steps = request.samples as f64 * loaded.1.storm.steps() as f64;
+    if storm_steps > state.config.max_job_steps as f64 {
+        return Err(crate::error::Error::invalid(
+            "samples",
+            format!(
+                "samples × steps per storm = {storm_steps:.3e} reference storm steps exceeds this server's budget of {:.3e}",
+                state.config.max_job_steps as f64
+            ),
+        )
+        .into());
     }
     let queued = ValidationJob { metamodel_id: id, samples: request.samples, seed: request.seed };
     let text = serde_json::to_string(&queued).expect("a job serialises");

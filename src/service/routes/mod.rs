@@ -208,7 +208,9 @@ pub async fn accept_job(
     let new_id = uuid::Uuid::new_v4().to_string();
     let idempotency = key.as_deref().map(|k| (k, endpoint));
     let max_queued = state.config.max_queued_jobs as i64;
-    let id = match state.store.insert_job(&new_id, kind.as_str(), &request, idempotency, max_queued).await? {
+    let keys_since = state.config.idempotency_keys_since_ms();
+    let id = match state.store.insert_job(&new_id, kind.as_str(), &request, idempotency, keys_since, max_queued).await?
+    {
         Enqueued::New => {
             state.wake.notify_one();
             new_id

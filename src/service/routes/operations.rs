@@ -18,6 +18,9 @@ use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
+/// Seconds a client should wait before opening an event stream again when all are taken.
+const STREAMS_FULL_RETRY_S: u64 = 5;
+
 pub fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
         .routes(routes!(list_operations))
@@ -173,14 +176,27 @@ async fn cancel_operation(State(state): State<AppState>, Path(id): Path<String>)
     responses(
         (status = 200, description = "`operation` events, each an Operation as JSON", content_type = "text/event-stream", body = String),
         (status = 404, description = "No such operation", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 503, description = "Too many event streams are open on this server", body = ProblemDetails, content_type = "application/problem+json",
+            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
     ))]
 async fn operation_events(
     State(state): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Sse<impl Stream<Item = Result<Event, Infallible>>>, ApiError> {
     state.store.job(&id).await?.ok_or_else(|| ApiError::not_found("operation", &id))?;
-    let stream =
-        futures_util::stream::unfold((state, id, None::<String>, false), |(state, id, last, finished)| async move {
+    // Each open stream polls the database; the permit, dropped with the stream, bounds them.
+    let permit = state.streams.clone().try_acquire_owned().map_err(|_| {
+        ApiError::unavailable(
+            format!(
+                "{} event streams are open on this server; poll the operation instead",
+                state.config.max_event_streams
+            ),
+            STREAMS_FULL_RETRY_S,
+        )
+    })?;
+    let stream = futures_util::stream::unfold(
+        (state, id, None::<String>, false, permit),
+        |(state, id, last, finished, permit)| async move {
             if finished {
                 return None;
             }
@@ -196,12 +212,13 @@ async fn operation_events(
                     if last.as_deref() != Some(text.as_str()) {
                         return Some((
                             Ok(Event::default().event("operation").data(text.clone())),
-                            (state, id, Some(text), value.done),
+                            (state, id, Some(text), value.done, permit),
                         ));
                     }
                 }
                 tokio::time::sleep(Duration::from_millis(500)).await;
             }
-        });
+        },
+    );
     Ok(Sse::new(stream).keep_alive(KeepAlive::default()))
 }

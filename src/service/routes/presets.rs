@@ -16,7 +16,7 @@ pub fn router() -> OpenApiRouter<AppState> {
 }
 
 /// A built-in study.
-#[derive(Debug, Serialize, ToSchema)]
+#[derive(Debug, Clone, Serialize, ToSchema)]
 pub struct Preset {
     pub name: String,
     pub description: String,
@@ -60,11 +60,25 @@ fn describe(name: &str) -> Result<Preset, ApiError> {
     })
 }
 
+/// Every preset described, built once (each is an eigen-analysis and a spectral table) off the
+/// runtime and kept.
+async fn described() -> Result<&'static [Preset], ApiError> {
+    static DESCRIBED: tokio::sync::OnceCell<Vec<Preset>> = tokio::sync::OnceCell::const_new();
+    let presets = DESCRIBED
+        .get_or_try_init(|| async {
+            tokio::task::spawn_blocking(|| PRESETS.iter().map(|n| describe(n)).collect::<Result<Vec<_>, _>>())
+                .await
+                .map_err(ApiError::internal)?
+        })
+        .await?;
+    Ok(presets)
+}
+
 /// The built-in studies.
 #[utoipa::path(get, path = "/v1/presets", tag = "presets",
     responses((status = 200, description = "Every preset", body = PresetList)))]
 async fn list_presets() -> Result<Json<PresetList>, ApiError> {
-    Ok(Json(PresetList { presets: PRESETS.iter().map(|n| describe(n)).collect::<Result<_, _>>()? }))
+    Ok(Json(PresetList { presets: described().await?.to_vec() }))
 }
 
 /// One built-in study and its default calibration request.
@@ -75,5 +89,6 @@ async fn list_presets() -> Result<Json<PresetList>, ApiError> {
         (status = 404, description = "No such preset", body = ProblemDetails, content_type = "application/problem+json"),
     ))]
 async fn get_preset(Path(name): Path<String>) -> Result<Json<Preset>, ApiError> {
-    Ok(Json(describe(&name)?))
+    let found = described().await?.iter().find(|p| p.name == name);
+    found.cloned().map(Json).ok_or_else(|| ApiError::not_found("preset", &name))
 }

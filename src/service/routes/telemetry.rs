@@ -8,13 +8,31 @@ use axum::middleware::Next;
 use axum::response::{IntoResponse, Response};
 use metrics_exporter_prometheus::{PrometheusBuilder, PrometheusHandle};
 use std::sync::OnceLock;
-use std::time::Instant;
+use std::time::{Duration, Instant};
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
+/// How often recorded samples are folded into the histograms' rolling summaries. Until they are,
+/// every request's latency is kept as a raw sample, so without upkeep (and with no scraper) the
+/// recorder would grow by a few bytes per request for ever.
+const UPKEEP_INTERVAL: Duration = Duration::from_secs(5);
+
 fn handle() -> &'static PrometheusHandle {
     static HANDLE: OnceLock<PrometheusHandle> = OnceLock::new();
-    HANDLE.get_or_init(|| PrometheusBuilder::new().install_recorder().expect("the metrics recorder installs once"))
+    HANDLE.get_or_init(|| {
+        let handle = PrometheusBuilder::new().install_recorder().expect("the metrics recorder installs once");
+        let upkeep = handle.clone();
+        std::thread::Builder::new()
+            .name("metrics-upkeep".into())
+            .spawn(move || {
+                loop {
+                    std::thread::sleep(UPKEEP_INTERVAL);
+                    upkeep.run_upkeep();
+                }
+            })
+            .expect("the metrics upkeep thread starts");
+        handle
+    })
 }
 
 pub fn router() -> OpenApiRouter<AppState> {

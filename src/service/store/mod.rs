@@ -138,18 +138,26 @@ impl Store {
     }
 
     /// Queues a job unless `max_queued` jobs already wait. With an idempotency key (key, endpoint)
-    /// the key is recorded in the same transaction; if it was already used, nothing is queued and
-    /// the earlier operation is returned instead (even when the queue is full).
+    /// the key is recorded in the same transaction; if it was already used since `keys_since_ms`,
+    /// nothing is queued and the earlier operation is returned instead (even when the queue is
+    /// full). A key recorded before `keys_since_ms` has expired and is used afresh.
     pub async fn insert_job(
         &self,
         id: &str,
         kind: &str,
         request: &str,
         idempotency: Option<(&str, &str)>,
+        keys_since_ms: i64,
         max_queued: i64,
     ) -> Result<Enqueued, sqlx::Error> {
         let mut tx = self.pool.begin().await?;
         if let Some((key, endpoint)) = idempotency {
+            sqlx::query("DELETE FROM idempotency WHERE idempotency_key = $1 AND endpoint = $2 AND created_at < $3")
+                .bind(key)
+                .bind(endpoint)
+                .bind(keys_since_ms)
+                .execute(&mut *tx)
+                .await?;
             let earlier = sqlx::query(
                 "SELECT operation_id, request FROM idempotency WHERE idempotency_key = $1 AND endpoint = $2",
             )
@@ -337,6 +345,15 @@ impl Store {
         self.job(id).await
     }
 
+    /// Forgets the idempotency keys recorded before `keys_since_ms`; how many were pruned.
+    pub async fn prune_idempotency(&self, keys_since_ms: i64) -> Result<u64, sqlx::Error> {
+        let done = sqlx::query("DELETE FROM idempotency WHERE created_at < $1")
+            .bind(keys_since_ms)
+            .execute(&self.pool)
+            .await?;
+        Ok(done.rows_affected())
+    }
+
     pub async fn job(&self, id: &str) -> Result<Option<JobRow>, sqlx::Error> {
         let row = sqlx::query(concat!("SELECT ", job_columns!(), " FROM jobs WHERE id = $1"))
             .bind(id)
@@ -465,7 +482,7 @@ mod tests {
     use super::*;
 
     async fn queue(store: &Store, id: &str) {
-        assert_eq!(store.insert_job(id, "calibration", "{}", None, 100).await.unwrap(), Enqueued::New);
+        assert_eq!(store.insert_job(id, "calibration", "{}", None, 0, 100).await.unwrap(), Enqueued::New);
     }
 
     #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -560,16 +577,22 @@ mod tests {
             assert_eq!(store.job("running").await.unwrap().unwrap().state, "queued", "{name}");
 
             let key = Some(("k", "calibrations"));
-            assert_eq!(store.insert_job("a", "calibration", "{}", key, 100).await.unwrap(), Enqueued::New);
-            let replay = store.insert_job("b", "calibration", "{}", key, 100).await.unwrap();
+            assert_eq!(store.insert_job("a", "calibration", "{}", key, 0, 100).await.unwrap(), Enqueued::New);
+            let replay = store.insert_job("b", "calibration", "{}", key, 0, 100).await.unwrap();
             assert_eq!(replay, Enqueued::Earlier { id: "a".into(), request: "{}".into() }, "{name}");
             // Two queued now ("running" was released, "a"): a queue of two is full, a replay still answers.
-            assert_eq!(store.insert_job("c", "calibration", "{}", None, 2).await.unwrap(), Enqueued::QueueFull);
+            assert_eq!(store.insert_job("c", "calibration", "{}", None, 0, 2).await.unwrap(), Enqueued::QueueFull);
             assert!(matches!(
-                store.insert_job("d", "calibration", "{}", key, 2).await.unwrap(),
+                store.insert_job("d", "calibration", "{}", key, 0, 2).await.unwrap(),
                 Enqueued::Earlier { .. }
             ));
             assert!(store.job("c").await.unwrap().is_none() && store.ping().await, "{name}");
+            // An expired key starts new work; pruning forgets the keys older than the cutoff.
+            let later = now_ms() + 1;
+            assert_eq!(store.insert_job("e", "calibration", "{}", key, later, 100).await.unwrap(), Enqueued::New);
+            let other = Some(("k2", "calibrations"));
+            assert_eq!(store.insert_job("f", "calibration", "{}", other, 0, 100).await.unwrap(), Enqueued::New);
+            assert_eq!(store.prune_idempotency(now_ms() + 1).await.unwrap(), 2, "{name}");
         }
     }
 
