@@ -7,6 +7,7 @@
 //! for a given seed.
 
 pub mod analysis;
+pub mod cancel;
 pub mod cli;
 pub mod dynamics;
 pub mod error;

@@ -5,6 +5,7 @@
 //! `mass_factor`, `damping_ratio` (shared by all modes), `damper_c1` … `damper_cG` (N·(s/m)^α, one
 //! per damper group from the ground up) and `wind_speed` (m/s at the station, 10 m).
 
+use crate::cancel::Never;
 use crate::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::structure::{CustomStructure, Modes, Structure, frame40};
@@ -299,7 +300,8 @@ impl Problem {
         Ok((p, forces))
     }
 
-    /// One storm through the reference model. Full-order runs always use the floor field.
+    /// One storm through the reference model (not cancellable: for the command line). Full-order
+    /// runs always use the floor field.
     pub fn reference_run(&self, x: &[f64], order: Order, path: WindPath, rng: &mut Rng) -> Result<StormRun> {
         let p = self.parameters(x)?;
         let dampers = self.dampers(&p)?;
@@ -310,7 +312,8 @@ impl Problem {
                 let forces = self.modal_forces(&p, path, rng)?;
                 let wind_seconds = started.elapsed().as_secs_f64();
                 let started = Instant::now();
-                let response = integrate_reduced(&self.sample_modes(&p), p.damping_ratio, &dampers, &forces, dt)?;
+                let response =
+                    integrate_reduced(&self.sample_modes(&p), p.damping_ratio, &dampers, &forces, dt, &Never)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
                 Ok(StormRun {
                     roof: response.roof(),
@@ -332,7 +335,7 @@ impl Problem {
                     p.mass_factor,
                     p.damping_ratio,
                 );
-                let response = integrate_full(&system, &dampers, &forces, dt)?;
+                let response = integrate_full(&system, &dampers, &forces, dt, &Never)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
                 let roof = response.displacements.last().cloned().unwrap_or_default();
                 Ok(StormRun { roof, modal_forces: None, modal_displacements: None, wind_seconds, integration_seconds })

@@ -2,6 +2,7 @@
 //! dampers on, and the reduced model (3 modes) against the full-order model on the same storm.
 
 use faer::Mat;
+use windmeta::cancel::Never;
 use windmeta::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
 use windmeta::problem::Problem;
 use windmeta::structure::Modes;
@@ -37,8 +38,10 @@ fn modal_integrator_is_exact_for_a_step_load() {
     let dt = 0.05;
     let steps = 2001;
     let forces = ModalForces { mean: vec![0.0], series: vec![vec![force; steps]] };
-    let y =
-        integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt).unwrap().displacements.remove(0);
+    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt, &Never)
+        .unwrap()
+        .displacements
+        .remove(0);
     let static_ = force / (mass * omega * omega);
     let wd = omega * (1.0 - zeta * zeta).sqrt();
     for (i, yi) in y.iter().enumerate() {
@@ -58,8 +61,10 @@ fn modal_integrator_matches_the_harmonic_closed_form() {
     let steps = 3001;
     let series = (0..steps).map(|i| force * (forcing * i as f64 * dt).sin()).collect();
     let forces = ModalForces { mean: vec![0.0], series: vec![series] };
-    let y =
-        integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt).unwrap().displacements.remove(0);
+    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt, &Never)
+        .unwrap()
+        .displacements
+        .remove(0);
     let amplitude = y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let k = mass * omega * omega;
     for (i, yi) in y.iter().enumerate() {
@@ -79,7 +84,7 @@ fn full_order_integrator_matches_the_harmonic_closed_form() {
     let system = FullSystem { size: 1, mass: vec![mass], damping: vec![2.0 * zeta * omega * mass], stiffness: vec![k] };
     let series = (0..steps).map(|i| force * (forcing * i as f64 * dt).sin()).collect();
     let forces = FloorForces { mean: vec![0.0], series: vec![series] };
-    let u = integrate_full(&system, &no_dampers(), &forces, dt).unwrap().displacements.remove(0);
+    let u = integrate_full(&system, &no_dampers(), &forces, dt, &Never).unwrap().displacements.remove(0);
     let amplitude = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for (i, ui) in u.iter().enumerate() {
         let exact = harmonic_from_rest(i as f64 * dt, omega, zeta, force / k, forcing);
@@ -118,7 +123,7 @@ fn reduced_model_converges_as_the_time_step_shrinks() {
         .iter()
         .map(|&every| {
             let f = ModalForces { mean: forces.mean.clone(), series: subsample(&forces.series, every) };
-            integrate_reduced(&modes, params.damping_ratio, &dampers, &f, finest * every as f64).unwrap().roof()
+            integrate_reduced(&modes, params.damping_ratio, &dampers, &f, finest * every as f64, &Never).unwrap().roof()
         })
         .collect();
     let reference = &roofs[3];
@@ -150,7 +155,7 @@ fn full_order_model_converges_as_the_time_step_shrinks() {
         .iter()
         .map(|&every| {
             let f = FloorForces { mean: forces.mean.clone(), series: subsample(&forces.series, every) };
-            integrate_full(&system, &dampers, &f, finest * every as f64).unwrap().displacements.pop().unwrap()
+            integrate_full(&system, &dampers, &f, finest * every as f64, &Never).unwrap().displacements.pop().unwrap()
         })
         .collect();
     let reference = &roofs[3];
@@ -170,9 +175,10 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
     let floor_forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(21)).unwrap();
     let modal_forces = floor_forces.project(p.modes.shapes.as_ref());
     let dampers = p.dampers(&params).unwrap();
-    let reduced = integrate_reduced(&p.sample_modes(&params), params.damping_ratio, &dampers, &modal_forces, 0.01)
-        .unwrap()
-        .roof();
+    let reduced =
+        integrate_reduced(&p.sample_modes(&params), params.damping_ratio, &dampers, &modal_forces, 0.01, &Never)
+            .unwrap()
+            .roof();
     let system = FullSystem::new(
         &p.structure,
         &p.all_modes,
@@ -180,7 +186,7 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
         params.mass_factor,
         params.damping_ratio,
     );
-    let full = integrate_full(&system, &dampers, &floor_forces, 0.01).unwrap().displacements.pop().unwrap();
+    let full = integrate_full(&system, &dampers, &floor_forces, 0.01, &Never).unwrap().displacements.pop().unwrap();
     let peak = |u: &[f64]| u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mean = |u: &[f64]| u.iter().sum::<f64>() / u.len() as f64;
     let sd = |u: &[f64]| (u.iter().map(|v| (v - mean(u)).powi(2)).sum::<f64>() / u.len() as f64).sqrt();

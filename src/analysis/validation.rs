@@ -93,6 +93,7 @@ pub fn validate(
                 &problem.dampers(&p)?,
                 &forces,
                 problem.storm.time_step,
+                &|| observer.cancelled(),
             )?;
             let reference_seconds = started.elapsed().as_secs_f64();
             let started = Instant::now();

@@ -4,6 +4,7 @@
 //! exceedance curve end to end. Speed is measured here and in `benches/`, never asserted in a test.
 
 use crate::analysis::{Response, automatic_thresholds, exceedance_curve, metamodel_peaks};
+use crate::cancel::Never;
 use crate::dynamics::{FullSystem, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
@@ -159,9 +160,10 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
             time(repetitions, |r| p.modal_wind.simulate(params.wind_speed, p.storm.duration, &mut rng_from_seed(r)))?;
         let modal_grid =
             time(repetitions, |r| p.modal_wind.forces(params.wind_speed, &p.storm, &mut rng_from_seed(r)))?;
-        let reduced =
-            time(repetitions, |_| integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, dt))?;
-        let full = time(repetitions, |_| integrate_full(&system, &dampers, &floor_forces, dt))?;
+        let reduced = time(repetitions, |_| {
+            integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, dt, &Never)
+        })?;
+        let full = time(repetitions, |_| integrate_full(&system, &dampers, &floor_forces, dt, &Never))?;
         let metamodel_batch = time(repetitions, |_| metamodel.peaks(p, &batch, &weights))?;
         let per_metamodel = metamodel_batch / LANES as f64;
         let rows = vec![

@@ -8,6 +8,7 @@
 //! of [`super::damper`].
 
 use super::damper::{Dampers, ImplicitDamperSolve};
+use crate::cancel::{CHECK_EVERY_STEPS, Cancel, check};
 use crate::error::{Error, Result};
 use crate::structure::Modes;
 use crate::wind::ModalForces;
@@ -98,6 +99,7 @@ pub fn integrate_reduced(
     dampers: &Dampers,
     forces: &ModalForces,
     time_step: f64,
+    cancel: &dyn Cancel,
 ) -> Result<ModalResponse> {
     let count = modes.count();
     if forces.series.len() != count {
@@ -131,6 +133,9 @@ pub fn integrate_reduced(
     let mut modal_damper_force = vec![0.0; count];
 
     for i in 1..steps {
+        if i % CHECK_EVERY_STEPS == 0 {
+            check(cancel)?;
+        }
         for m in 0..count {
             let c = &coefficients[m];
             let next = forces.series[m][i] / masses[m];

@@ -3,6 +3,7 @@
 
 use super::lars::lars_path;
 use super::narx::{Exogenous, NarxTerm, free_run, regressors, relative_error, rest_output};
+use crate::cancel::{Cancel, check};
 use crate::error::{Error, Result};
 use crate::linalg::{cholesky, cholesky_solve};
 use faer::prelude::SolveLstsq;
@@ -192,6 +193,7 @@ pub fn select_structure(
     records: &[Record],
     evaluation: &[Record],
     max_terms: usize,
+    cancel: &dyn Cancel,
 ) -> Result<StructureChoice> {
     let non_constant: Vec<NarxTerm> = dictionary.iter().copied().filter(|t| !t.is_constant()).collect();
     let has_constant = dictionary.iter().any(NarxTerm::is_constant);
@@ -216,7 +218,12 @@ pub fn select_structure(
     let candidates: BTreeSet<Vec<NarxTerm>> = paths.into_iter().flatten().collect();
     let compressed: Vec<CompressedRegression> =
         evaluation.par_iter().map(|r| CompressedRegression::new(dictionary, r)).collect::<Result<_>>()?;
+    // Each candidate costs a free run of every evaluation record; once a stop is requested the
+    // remaining ones are skipped (scored infinite) and the stop is reported below.
     let mean_error = |terms: &[NarxTerm]| -> f64 {
+        if cancel.requested() {
+            return f64::INFINITY;
+        }
         let total: f64 = evaluation
             .iter()
             .zip(&compressed)
@@ -226,6 +233,7 @@ pub fn select_structure(
     };
     let scored: Vec<(f64, Vec<NarxTerm>)> =
         candidates.par_iter().map(|terms| (mean_error(terms), terms.clone())).filter(|(e, _)| e.is_finite()).collect();
+    check(cancel)?;
     let best = scored.iter().map(|(e, _)| *e).fold(f64::INFINITY, f64::min);
     let tolerance = best * PARSIMONY_FACTOR + 1e-15;
     let (mut error, mut terms) = scored
@@ -254,6 +262,7 @@ pub fn select_structure(
             _ => break,
         }
     }
+    check(cancel)?;
     Ok(StructureChoice { terms, error, candidates: candidates.len() })
 }
 
@@ -269,12 +278,19 @@ pub enum Refinement {
     None,
 }
 
-/// Refines `theta` on the sum of squared free-run errors over the record.
-pub fn refine(method: Refinement, terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64> {
+/// Refines `theta` on the sum of squared free-run errors over the record; each iteration (one
+/// free run of the record) checks `cancel`.
+pub fn refine(
+    method: Refinement,
+    terms: &[NarxTerm],
+    theta: Vec<f64>,
+    record: &Record,
+    cancel: &dyn Cancel,
+) -> Result<Vec<f64>> {
     match method {
-        Refinement::LevenbergMarquardt => levenberg_marquardt(terms, theta, record),
-        Refinement::NelderMead => nelder_mead(terms, theta, record),
-        Refinement::None => theta,
+        Refinement::LevenbergMarquardt => levenberg_marquardt(terms, theta, record, cancel),
+        Refinement::NelderMead => nelder_mead(terms, theta, record, cancel),
+        Refinement::None => Ok(theta),
     }
 }
 
@@ -361,12 +377,13 @@ fn sensitivities(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Option<(
 }
 
 /// Levenberg-Marquardt on the simulation error, scaled by diag(JᵀJ) (Marquardt's variant).
-fn levenberg_marquardt(terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64> {
+fn levenberg_marquardt(terms: &[NarxTerm], theta: Vec<f64>, record: &Record, cancel: &dyn Cancel) -> Result<Vec<f64>> {
     let p = terms.len();
     let mut theta = theta;
-    let Some(mut current) = sensitivities(terms, &theta, record) else { return theta };
+    let Some(mut current) = sensitivities(terms, &theta, record) else { return Ok(theta) };
     let mut lambda = 1e-3;
     for _ in 0..200 {
+        check(cancel)?;
         let (jtj, jtr, sse) = &current;
         let mut a = jtj.clone();
         for i in 0..p {
@@ -397,13 +414,13 @@ fn levenberg_marquardt(terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> 
             }
         }
     }
-    theta
+    Ok(theta)
 }
 
 /// Nelder-Mead (reflection 1, expansion 2, contraction ½, shrink ½; MATLAB's fminsearch start
 /// simplex θ₀ + 5 % per coordinate), stopping when the simplex has collapsed to relative 10⁻¹⁰ in
 /// both coordinates and values, or after 200·n iterations.
-fn nelder_mead(terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64> {
+fn nelder_mead(terms: &[NarxTerm], theta: Vec<f64>, record: &Record, cancel: &dyn Cancel) -> Result<Vec<f64>> {
     let n = theta.len();
     let f = |x: &[f64]| sum_of_squares(terms, x, record);
     let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
@@ -419,6 +436,7 @@ fn nelder_mead(terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64>
     };
     let along = |c: &[f64], x: &[f64], t: f64| -> Vec<f64> { c.iter().zip(x).map(|(c, x)| c + t * (x - c)).collect() };
     for _ in 0..200 * n {
+        check(cancel)?;
         simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
         let best = simplex[0].1;
         let spread_f = simplex.iter().map(|s| (s.1 - best).abs()).fold(0.0, f64::max);
@@ -461,12 +479,13 @@ fn nelder_mead(terms: &[NarxTerm], theta: Vec<f64>, record: &Record) -> Vec<f64>
         }
     }
     simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    simplex.swap_remove(0).0
+    Ok(simplex.swap_remove(0).0)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cancel::Never;
     use crate::surrogate::narx::NarxOptions;
     use crate::uncertainty::rng_from_seed;
     use rand::RngExt;
@@ -497,7 +516,7 @@ mod tests {
     fn identification_recovers_a_known_arx_model() {
         let (terms, theta) = arx();
         let records: Vec<Record> = (1..=3).map(|seed| record(&theta, &terms, seed)).collect();
-        let choice = select_structure(&NarxOptions::default().dictionary(0, 1), &records, &records, 8).unwrap();
+        let choice = select_structure(&NarxOptions::default().dictionary(0, 1), &records, &records, 8, &Never).unwrap();
         let mut truth = terms.clone();
         truth.sort();
         assert_eq!(choice.terms, truth);
@@ -537,7 +556,7 @@ mod tests {
         let start: Vec<f64> = theta.iter().map(|v| v * 1.01).collect();
         assert!(simulation_error(&terms, &start, &data) > 1e-3);
         for method in [Refinement::LevenbergMarquardt, Refinement::NelderMead] {
-            let refined = refine(method, &terms, start.clone(), &data);
+            let refined = refine(method, &terms, start.clone(), &data, &Never).unwrap();
             let error = simulation_error(&terms, &refined, &data);
             assert!(error < 1e-8, "{method:?}: error {error}, θ = {refined:?}");
         }

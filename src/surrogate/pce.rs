@@ -7,6 +7,7 @@
 //! Gaussian standard space, Legendre for the uniform one); held inputs take no part.
 
 use super::lars::lars_path;
+use crate::cancel::{Cancel, check};
 use crate::error::{Error, Result};
 use crate::linalg::{cholesky, cholesky_solve, forward_substitute};
 use crate::uncertainty::{InputModel, StandardSpace};
@@ -220,8 +221,15 @@ impl SparsePce {
         self.terms.iter().zip(&self.coefficients).filter(|(t, _)| !t.is_empty()).map(|(_, c)| c * c).sum()
     }
 
-    /// Fits a sparse expansion of `targets` observed at standard-space points `xi`.
-    pub fn fit(model: &InputModel, xi: &[Vec<f64>], targets: &[f64], options: &PceOptions) -> Result<SparsePce> {
+    /// Fits a sparse expansion of `targets` observed at standard-space points `xi`; `cancel` is
+    /// checked between the rows of each basis' Gram matrix and the steps of its LARS path.
+    pub fn fit(
+        model: &InputModel,
+        xi: &[Vec<f64>],
+        targets: &[f64],
+        options: &PceOptions,
+        cancel: &dyn Cancel,
+    ) -> Result<SparsePce> {
         options.validate()?;
         let n = targets.len();
         if n < 3 || xi.len() != n {
@@ -246,7 +254,8 @@ impl SparsePce {
         let mut since_improvement = 0;
         for degree in 1..=options.max_degree {
             let terms = candidate_terms(&active, degree, options.q_norm, options.max_interaction);
-            let candidate = fit_basis(&families, &terms, &tables, targets, variance, degree, options.lars_early_stop);
+            let basis = Basis { families: &families, terms: &terms, degree };
+            let candidate = fit_basis(&basis, &tables, targets, variance, options.lars_early_stop, cancel)?;
             match (&best, candidate) {
                 (_, None) => since_improvement += 1,
                 (None, Some(c)) => best = Some(c),
@@ -270,14 +279,14 @@ impl SparsePce {
 /// Hybrid LARS on one candidate basis: the LARS order of entry on centred, scaled columns, then
 /// least squares (constant included) on every prefix, scored by the corrected LOO error.
 fn fit_basis(
-    families: &[StandardSpace],
-    terms: &[Term],
+    basis: &Basis<'_>,
     tables: &[Vec<Vec<f64>>],
     targets: &[f64],
     variance: f64,
-    degree: usize,
     early_stop: usize,
-) -> Option<SparsePce> {
+    cancel: &dyn Cancel,
+) -> Result<Option<SparsePce>> {
+    let Basis { families, terms, degree } = *basis;
     let n = targets.len();
     let p = terms.len();
     // Design matrix Ψ, row-major N×P; column 0 is the constant.
@@ -297,6 +306,7 @@ fn fit_basis(
     let standard = |r: usize, c: usize| (psi[r * p + c + 1] - means[c]) / norms[c];
     let mut gram = vec![0.0; cols * cols];
     for i in 0..cols {
+        check(cancel)?;
         for j in 0..=i {
             let v: f64 = (0..n).map(|r| standard(r, i) * standard(r, j)).sum();
             gram[i * cols + j] = v;
@@ -308,6 +318,7 @@ fn fit_basis(
     let mut best: Option<(f64, Vec<usize>, Vec<f64>)> = None;
     let mut since_improvement = 0;
     for step in &path {
+        check(cancel)?;
         let selected: Vec<usize> = std::iter::once(0).chain(step.active.iter().map(|&c| c + 1)).collect();
         if let Some((error, coefficients)) = least_squares_loo(&psi, p, &selected, targets, variance) {
             if best.as_ref().is_none_or(|b| error < b.0) {
@@ -321,13 +332,21 @@ fn fit_basis(
             break;
         }
     }
-    best.map(|(loo_error, selected, coefficients)| SparsePce {
+    Ok(best.map(|(loo_error, selected, coefficients)| SparsePce {
         families: families.to_vec(),
         terms: selected.iter().map(|&c| terms[c].clone()).collect(),
         coefficients,
         degree,
         loo_error,
-    })
+    }))
+}
+
+/// A candidate basis: the families of the inputs, the polynomials, and their largest degree.
+#[derive(Clone, Copy)]
+struct Basis<'a> {
+    families: &'a [StandardSpace],
+    terms: &'a [Term],
+    degree: usize,
 }
 
 /// Least squares on the selected columns of Ψ; returns the corrected leave-one-out error
@@ -378,6 +397,7 @@ fn least_squares_loo(psi: &[f64], p: usize, selected: &[usize], y: &[f64], varia
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::cancel::Never;
     use crate::uncertainty::{Input, Marginal, latin_hypercube, rng_from_seed};
     use std::f64::consts::PI;
 
@@ -455,7 +475,7 @@ mod tests {
             x.iter().map(|x| x[0].sin() + 7.0 * x[1].sin().powi(2) + 0.1 * x[2].powi(4) * x[0].sin()).collect();
         let xi: Vec<Vec<f64>> = x.iter().map(|x| model.to_standard(x)).collect();
         let options = PceOptions { max_degree: 14, max_interaction: 3, ..Default::default() };
-        let pce = SparsePce::fit(&model, &xi, &y, &options).unwrap();
+        let pce = SparsePce::fit(&model, &xi, &y, &options, &Never).unwrap();
         let variance = 49.0 / 8.0 + 0.1 * PI.powi(4) / 5.0 + 0.01 * PI.powi(8) / 18.0 + 0.5;
         assert!((pce.mean() / 3.5 - 1.0).abs() < 0.01, "mean {}", pce.mean());
         assert!((pce.variance() / variance - 1.0).abs() < 0.02, "variance {} vs {variance}", pce.variance());
@@ -492,7 +512,7 @@ mod tests {
                 2.0 + 0.5 * z[0] - 0.25 * he2 + 0.1 * z[0] * z[3]
             })
             .collect();
-        let pce = SparsePce::fit(&model, &xi, &y, &PceOptions::default()).unwrap();
+        let pce = SparsePce::fit(&model, &xi, &y, &PceOptions::default(), &Never).unwrap();
         assert!((pce.mean() - 2.0).abs() < 1e-10);
         assert!((pce.variance() - (0.25 + 0.0625 + 0.01)).abs() < 1e-10);
         assert!(pce.terms.iter().all(|t| t.iter().all(|&(i, _)| i != 2)), "held input in {:?}", pce.terms);

@@ -19,6 +19,7 @@ use super::metamodel::{
 };
 use super::narx::relative_error;
 use super::pce::SparsePce;
+use crate::cancel::Cancel;
 use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
@@ -73,12 +74,24 @@ struct Experiment {
 
 impl Experiment {
     /// Runs experiment `k` of the design through the reduced-order reference.
-    fn run(problem: &Problem, options: &CalibrationOptions, x: &[f64], k: usize) -> Result<Experiment> {
+    fn run(
+        problem: &Problem,
+        options: &CalibrationOptions,
+        x: &[f64],
+        k: usize,
+        cancel: &dyn Cancel,
+    ) -> Result<Experiment> {
         let (p, coarse) = problem.sample_storm(x, options.wind, options.seed, k)?;
         let forces = coarse.on_grid(&problem.storm);
         let dampers = problem.dampers(&p)?;
-        let response =
-            integrate_reduced(&problem.sample_modes(&p), p.damping_ratio, &dampers, &forces, problem.storm.time_step)?;
+        let response = integrate_reduced(
+            &problem.sample_modes(&p),
+            p.damping_ratio,
+            &dampers,
+            &forces,
+            problem.storm.time_step,
+            cancel,
+        )?;
         Ok(Experiment { q: forces.series, q_mean: forces.mean, y: response.displacements })
     }
 
@@ -99,7 +112,13 @@ impl Experiment {
             .collect()
     }
 
-    fn fit(&self, index: usize, plan: &CalibrationPlan, options: &CalibrationOptions) -> Result<ExperimentFit> {
+    fn fit(
+        &self,
+        index: usize,
+        plan: &CalibrationPlan,
+        options: &CalibrationOptions,
+        cancel: &dyn Cancel,
+    ) -> Result<ExperimentFit> {
         let coupled = coupled(options, plan.scales.len());
         let mut fit = ExperimentFit {
             index,
@@ -110,7 +129,7 @@ impl Experiment {
         };
         for (record, structure) in self.records(&plan.scales, coupled).iter().zip(&plan.structures) {
             let start = least_squares(&structure.terms, record)?;
-            let theta = refine(options.refinement, &structure.terms, start, record);
+            let theta = refine(options.refinement, &structure.terms, start, record, cancel)?;
             let error = simulate(&structure.terms, &theta, record)
                 .map_or(f64::INFINITY, |y_hat| relative_error(&record.y, &y_hat));
             fit.coefficients.push(theta);
@@ -150,6 +169,7 @@ pub struct Planned {
 /// deviations' scales and every mode's structure.
 pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
     options.validate()?;
+    let cancel = || observer.cancelled();
     let started = Instant::now();
     let design = latin_hypercube(&problem.inputs, options.experiments, &mut rng_from_seed(options.seed));
     let k = design.len();
@@ -161,7 +181,7 @@ pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Obse
         .par_iter()
         .map(|&i| {
             check_cancel(observer)?;
-            let experiment = Experiment::run(problem, options, &design[i], i)?;
+            let experiment = Experiment::run(problem, options, &design[i], i, &cancel)?;
             observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: k });
             Ok(experiment)
         })
@@ -186,7 +206,7 @@ pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Obse
         observer.progress(Progress::Structure { mode: mode + 1 });
         let chosen: Vec<Record> = records.iter().map(|r| r[mode].clone()).collect();
         let dictionary = options.narx.dictionary(mode, modes);
-        structures.push(select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms)?);
+        structures.push(select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms, &cancel)?);
     }
     seconds.structure = stage.elapsed().as_secs_f64();
     Ok(Planned { plan: CalibrationPlan { design, selection, scales, structures }, selection: experiments, seconds })
@@ -200,7 +220,7 @@ impl Planned {
             .zip(&self.plan.selection)
             .map(|(experiment, &index)| {
                 check_cancel(observer)?;
-                experiment.fit(index, &self.plan, options)
+                experiment.fit(index, &self.plan, options, &|| observer.cancelled())
             })
             .collect()
     }
@@ -218,12 +238,13 @@ pub fn fit_experiments(
 ) -> Result<Vec<ExperimentFit>> {
     let done = AtomicUsize::new(done_before);
     let total = plan.design.len();
+    let cancel = || observer.cancelled();
     indices
         .par_iter()
         .map(|&k| {
             check_cancel(observer)?;
             let x = plan.design.get(k).ok_or_else(|| Error::invalid("experiment", format!("no experiment {k}")))?;
-            let fit = Experiment::run(problem, options, x, k)?.fit(k, plan, options)?;
+            let fit = Experiment::run(problem, options, x, k, &cancel)?.fit(k, plan, options, &cancel)?;
             observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
             Ok(fit)
         })
@@ -242,6 +263,7 @@ pub fn assemble(
     observer: &dyn Observer,
 ) -> Result<Metamodel> {
     let started = Instant::now();
+    let cancel = || observer.cancelled();
     let plan = &planned.plan;
     fits.sort_by_key(|f| f.index);
     if fits.iter().map(|f| f.index).ne(0..plan.design.len()) {
@@ -270,7 +292,7 @@ pub fn assemble(
             .collect();
         let static_response = StaticResponse {
             per_unit_mean_load,
-            expansion: SparsePce::fit(&problem.inputs, &xi, &static_targets, &options.pce)?,
+            expansion: SparsePce::fit(&problem.inputs, &xi, &static_targets, &options.pce, &cancel)?,
         };
         let thetas: Vec<Vec<f64>> = fits.iter().map(|f| f.coefficients[mode].clone()).collect();
         let parametrization = options.parametrization.unwrap_or_else(|| Parametrization::choose(&terms, &thetas));
@@ -279,7 +301,7 @@ pub fn assemble(
             .into_par_iter()
             .map(|i| {
                 let targets: Vec<f64> = expanded.iter().map(|phi| phi[i]).collect();
-                SparsePce::fit(&problem.inputs, &xi, &targets, &options.pce)
+                SparsePce::fit(&problem.inputs, &xi, &targets, &options.pce, &cancel)
             })
             .collect::<Result<_>>()?;
 
