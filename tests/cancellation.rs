@@ -18,15 +18,18 @@ use windmeta::surrogate::{CalibrationOptions, Metamodel, Observer, Progress, Sil
 
 const LATENCY_BOUND: Duration = Duration::from_secs(2);
 
+/// Which progress report marks a stage.
+type Trigger = fn(&Progress) -> bool;
+
 /// Asks the work to stop the first time `trigger` accepts a progress report.
 struct StopAt {
-    trigger: fn(&Progress) -> bool,
+    trigger: Trigger,
     stop: AtomicBool,
     asked: Mutex<Option<Instant>>,
 }
 
 impl StopAt {
-    fn new(trigger: fn(&Progress) -> bool) -> Self {
+    fn new(trigger: Trigger) -> Self {
         StopAt { trigger, stop: AtomicBool::new(false), asked: Mutex::new(None) }
     }
 
@@ -61,7 +64,7 @@ fn a_stop_reaches_every_stage_within_about_a_second() {
     let problem = problem();
     let options = options();
     let selection = options.selection_experiments;
-    let stages: [(&str, fn(&Progress) -> bool); 4] = [
+    let stages: [(&str, Trigger); 4] = [
         // Selection storms: wind generation and integration of the reference model.
         ("reference storms", |p| matches!(p, Progress::Experiments { done: 1, .. })),
         // NARX structure selection over the candidates.

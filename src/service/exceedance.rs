@@ -10,6 +10,7 @@ use crate::error::{Error, Result, require_finite};
 use crate::problem::Problem;
 use crate::structure::MAX_FLOORS;
 use crate::surrogate::{Metamodel, Observer, Progress};
+use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::sync::Arc;
@@ -114,7 +115,8 @@ impl ExceedanceRequest {
         };
         let mut inputs = problem.inputs.clone();
         for (name, value) in &self.fixed {
-            inputs = inputs.with_fixed(name, *value).map_err(|error| match error {
+            let speed = if name == "wind_speed" { WindLoads::check_speed(*value) } else { Ok(()) };
+            inputs = speed.and_then(|()| inputs.with_fixed(name, *value)).map_err(|error| match error {
                 Error::Invalid { reason, .. } => Error::invalid(format!("fixed.{name}"), reason),
                 other => other,
             })?;

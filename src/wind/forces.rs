@@ -78,7 +78,8 @@ impl WindLoads {
         SpectralGrid { lines: self.site.frequencies, cutoff: self.site.cutoff_rad_s }
     }
 
-    pub(super) fn check_speed(wind_speed: f64) -> Result<()> {
+    /// The station speeds the wind model serves.
+    pub fn check_speed(wind_speed: f64) -> Result<()> {
         if wind_speed.is_finite() && wind_speed > 0.0 && wind_speed < 150.0 {
             Ok(())
         } else {

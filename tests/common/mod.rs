@@ -1,6 +1,9 @@
-//! Helpers shared by the integration tests: spectral estimates of simulated series.
+//! Helpers shared by the integration tests: spectral estimates of simulated series, and the
+//! service under test ([`app`]).
 
 #![allow(dead_code)]
+
+pub mod app;
 
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;
