@@ -17,4 +17,5 @@ pub mod service;
 pub mod structure;
 pub mod surrogate;
 pub mod uncertainty;
+pub mod whole;
 pub mod wind;

@@ -410,7 +410,9 @@ async fn every_documented_status_is_real() {
     .await;
     let spec: Value =
         app.client.get(format!("{}/openapi.json", app.address)).send().await.unwrap().json().await.unwrap();
-    assert_eq!(spec, serde_json::to_value(windmeta::service::openapi()).unwrap(), "/openapi.json is the contract");
+    let contract = windmeta::service::openapi_for(&app.config);
+    assert_eq!(spec, serde_json::to_value(contract).unwrap(), "/openapi.json is the contract");
+    assert_eq!(spec["components"]["schemas"]["ExceedanceRequest"]["properties"]["samples"]["maximum"], 2000.0);
     let (operation, metamodel) =
         calibrate_over_http(&app, json!({"experiments": 8, "duration_s": 30, "seed": 3})).await;
     let (_, doomed_metamodel) = calibrate_over_http(&app, json!({"experiments": 4, "duration_s": 10})).await;

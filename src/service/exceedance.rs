@@ -35,11 +35,14 @@ pub struct ExceedanceRequest {
     /// Monte Carlo samples (storms) drawn from the input model; at most the server's
     /// `--max-samples` (20 000 by default).
     #[schema(minimum = 1, maximum = 1000000, default = 1000)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub samples: usize,
     #[schema(default = 1)]
+    #[serde(deserialize_with = "crate::whole::seed")]
     pub seed: u64,
     /// Floor (1-based, at most the structure's floors); the roof when absent.
     #[schema(minimum = 1, maximum = 200)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub floor: Option<usize>,
     pub response: ResponseKind,
     /// Peak values (m, 0 to 1000) at which to evaluate the curve; 50 evenly spread over the sampled

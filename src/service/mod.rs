@@ -12,7 +12,7 @@ mod schema;
 mod store;
 
 pub use config::{Role, ServeArgs};
-pub use routes::openapi;
+pub use routes::{openapi, openapi_for};
 #[doc(hidden)]
 pub use store::testing;
 
@@ -73,6 +73,7 @@ pub struct CalibrationRequest {
     pub damper_exponent: Option<f64>,
     /// Modes kept in the reduced model (3 in the paper), at most 10 and the structure's floors.
     #[schema(minimum = 1, maximum = 10)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub modes: Option<usize>,
     /// Storm length (s); 900 in the paper, at most a day. With the time step it sets the steps per
     /// storm (at most 10⁷), which with the experiments are checked against the server's budget.
@@ -84,7 +85,9 @@ pub struct CalibrationRequest {
     /// Reference runs on the Latin hypercube (K; 200 in the paper), at most the server's
     /// `--max-experiments` (1000 by default).
     #[schema(minimum = 4, maximum = 5000)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub experiments: Option<usize>,
+    #[serde(default, deserialize_with = "crate::whole::optional_seed")]
     pub seed: Option<u64>,
     pub narx: Option<crate::surrogate::narx::NarxOptions>,
     pub pce: Option<crate::surrogate::pce::PceOptions>,
@@ -135,8 +138,10 @@ impl CalibrationRequest {
 pub struct ValidationRequest {
     /// Fresh Monte Carlo samples, each one reference storm.
     #[schema(minimum = 2, maximum = 5000, default = 200)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub samples: usize,
     #[schema(default = 1000)]
+    #[serde(deserialize_with = "crate::whole::seed")]
     pub seed: u64,
 }
 

@@ -1,5 +1,5 @@
 //! Parts of the API description that the derives cannot say: the names a map of inputs may have,
-//! and the bounds of the items of an array.
+//! the bounds of the items of an array, and the records of an event stream.
 
 use utoipa::openapi::schema::{ArrayBuilder, ObjectBuilder, Schema, SchemaType, Type};
 use utoipa::openapi::{Ref, RefOr};
@@ -39,4 +39,21 @@ pub fn thresholds_schema() -> impl Into<RefOr<Schema>> {
         .items(item)
         .min_items(Some(1))
         .max_items(Some(10_000))
+}
+
+/// One server-sent event of an operation's stream, as a client parses it: the record's `event`
+/// field (always `operation`) and its `data`, an Operation as JSON text.
+pub fn operation_event_schema() -> Schema {
+    let data = ObjectBuilder::new()
+        .schema_type(Type::String)
+        .content_media_type("application/json")
+        .content_schema(Some(Ref::from_schema_name("Operation")));
+    ObjectBuilder::new()
+        .schema_type(Type::Object)
+        .description(Some("An `event: operation` record whose `data` is an Operation as JSON"))
+        .property("event", ObjectBuilder::new().schema_type(Type::String).enum_values(Some(["operation"])))
+        .property("data", data)
+        .required("event")
+        .required("data")
+        .into()
 }

@@ -22,9 +22,11 @@ pub const MAX_DAMPERS: usize = 4 * MAX_FLOORS;
 pub struct CustomDamper {
     /// Upper floor of the damper (1-based); it joins this floor to the one below (or the ground).
     #[schema(minimum = 1, maximum = 200)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub floor: usize,
     /// Coefficient group (1-based): dampers of a group share the input `damper_c{group}`.
     #[schema(minimum = 1, maximum = 10)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub group: usize,
     /// Cosine of the brace angle to the horizontal (1 for a horizontal damper).
     #[schema(exclusive_minimum = 0, maximum = 1)]

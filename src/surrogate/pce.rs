@@ -19,18 +19,22 @@ use serde::{Deserialize, Serialize};
 pub struct PceOptions {
     /// Largest total degree tried.
     #[schema(minimum = 1, maximum = 20)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub max_degree: usize,
     /// q of the hyperbolic truncation (1 = total degree).
     #[schema(exclusive_minimum = 0, maximum = 1)]
     pub q_norm: f64,
     /// Most inputs in one polynomial term.
     #[schema(minimum = 1, maximum = 14)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub max_interaction: usize,
     /// Stop raising the degree after this many degrees without improvement.
     #[schema(minimum = 1, maximum = 20)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub degree_early_stop: usize,
     /// Stop a LARS path after this many steps without a better corrected LOO error.
     #[schema(minimum = 1, maximum = 1000)]
+    #[serde(deserialize_with = "crate::whole::count")]
     pub lars_early_stop: usize,
 }
 

@@ -10,6 +10,8 @@ use windmeta::service::{Application, Role, ServeArgs};
 /// A server on port 0, running in this test's runtime until [`TestApp::stop`].
 pub struct TestApp {
     pub address: String,
+    /// The settings it runs with.
+    pub config: ServeArgs,
     pub client: reqwest::Client,
     stop: Option<oneshot::Sender<()>>,
     server: tokio::task::JoinHandle<std::io::Result<()>>,
@@ -52,13 +54,14 @@ pub async fn spawn_app_configured(db: &std::path::Path, adjust: impl FnOnce(&mut
         ..ServeArgs::default()
     };
     adjust(&mut args);
+    let config = args.clone();
     let app = Application::build(args).await.expect("the app builds");
     let address = format!("http://{}", app.local_addr());
     let (stop, stopped) = oneshot::channel::<()>();
     let server = tokio::spawn(app.run(async move {
         let _ = stopped.await;
     }));
-    TestApp { address, client: reqwest::Client::new(), stop: Some(stop), server }
+    TestApp { address, config, client: reqwest::Client::new(), stop: Some(stop), server }
 }
 
 /// Fails unless the API description documents `status` for the operation `path` resolves to: every

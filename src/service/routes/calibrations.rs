@@ -18,11 +18,11 @@ pub fn router() -> OpenApiRouter<AppState> {
 /// is optional (the paper's study by default); a bad spec is refused now, not in the worker.
 #[utoipa::path(post, path = "/v1/calibrations", tag = "calibrations",
     request_body = CalibrationRequest,
-    params(("Idempotency-Key" = Option<String>, Header, description = "Makes a retry return the same operation")),
+    params(("Idempotency-Key" = Option<String>, Header, pattern = "^[!-~]{1,255}$", description = "Makes a retry return the same operation")),
     responses(
         (status = 202, description = "Queued; follow `Location`", body = Operation,
             headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
-        (status = 422, description = "A field is invalid (named in `errors`), or the Idempotency-Key was used with another request", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 422, description = "A field is invalid (named in `errors`), a combination of fields is (square matrices of one size, time and generation steps that resolve the cut-off, a storm within the wind's period, admissible marginals), the study exceeds the server's memory or storm-step budget, or the Idempotency-Key was used with another request", body = ProblemDetails, content_type = "application/problem+json"),
         (status = 503, description = "The queue is full", body = ProblemDetails, content_type = "application/problem+json",
             headers(("Retry-After" = u64, description = "Seconds before trying again"))),
     ))]

@@ -139,7 +139,7 @@ fn prefers_async(headers: &HeaderMap) -> bool {
     params(
         ("id" = String, Path, description = "Metamodel id"),
         ("Prefer" = Option<String>, Header, description = "`respond-async` to run the request as an operation"),
-        ("Idempotency-Key" = Option<String>, Header, description = "Makes a retry of an asynchronous request return the same operation"),
+        ("Idempotency-Key" = Option<String>, Header, pattern = "^[!-~]{1,255}$", description = "Makes a retry of an asynchronous request return the same operation"),
     ),
     responses(
         (status = 200, description = "The curve", content(
@@ -217,7 +217,7 @@ async fn exceedance_curve(
     request_body = ValidationRequest,
     params(
         ("id" = String, Path, description = "Metamodel id"),
-        ("Idempotency-Key" = Option<String>, Header, description = "Makes a retry return the same operation"),
+        ("Idempotency-Key" = Option<String>, Header, pattern = "^[!-~]{1,255}$", description = "Makes a retry return the same operation"),
     ),
     responses(
         (status = 202, description = "Queued; follow `Location`", body = Operation,

@@ -10,7 +10,7 @@ mod presets;
 mod telemetry;
 
 pub use auth::ApiKeys;
-pub use openapi::openapi;
+pub use openapi::{openapi, openapi_for};
 
 use super::error::ApiError;
 use super::{AppState, Role};
@@ -47,6 +47,7 @@ pub fn router(state: AppState) -> Router {
     };
     let (routes, mut spec) = served.split_for_parts();
     openapi::add_shared_responses(&mut spec);
+    openapi::state_configured_limits(&mut spec, &state.config);
     let spec = Arc::new(spec.to_pretty_json().expect("the OpenAPI document serialises"));
     let mut app = routes
         .route(
@@ -194,16 +195,16 @@ pub async fn accept_job(
     use axum::response::IntoResponse;
     let key = match headers.get("idempotency-key") {
         None => None,
-        Some(v) => match v.to_str() {
-            Ok(k) if !k.is_empty() && k.len() <= 255 => Some(k.to_string()),
-            _ => {
-                return Err(crate::error::Error::invalid(
-                    "Idempotency-Key",
-                    "must be 1 to 255 visible ASCII characters",
-                )
-                .into());
-            }
-        },
+        Some(v) if (1..=255).contains(&v.len()) && v.as_bytes().iter().all(u8::is_ascii_graphic) => {
+            Some(String::from_utf8_lossy(v.as_bytes()).into_owned())
+        }
+        Some(_) => {
+            return Err(crate::error::Error::invalid(
+                "Idempotency-Key",
+                "must be 1 to 255 visible ASCII characters without spaces",
+            )
+            .into());
+        }
     };
     let new_id = uuid::Uuid::new_v4().to_string();
     let idempotency = key.as_deref().map(|k| (k, endpoint));

@@ -3,8 +3,10 @@
 //! shared machinery rather than from a handler are added here by the same rules the machinery
 //! follows, so each operation documents exactly the statuses it can return.
 
+use crate::service::ServeArgs;
 use utoipa::OpenApi;
 use utoipa::openapi::path::{Operation, ParameterIn};
+use utoipa::openapi::schema::Schema;
 use utoipa::openapi::security::{Http, HttpAuthScheme, SecurityRequirement, SecurityScheme};
 use utoipa::openapi::{ContentBuilder, Ref, RefOr, Response, ResponseBuilder};
 
@@ -35,11 +37,37 @@ pub fn base() -> utoipa::openapi::OpenApi {
     ApiDoc::openapi()
 }
 
-/// The complete API description, as served at `/openapi.json` and committed as openapi/openapi.yaml.
+/// The complete API description of a server with the default settings, committed as
+/// openapi/openapi.yaml.
 pub fn openapi() -> utoipa::openapi::OpenApi {
+    openapi_for(&ServeArgs::default())
+}
+
+/// The API description of a server with these settings, as it serves it at `/openapi.json`: the
+/// limits an operator sets are the bounds its contract states.
+pub fn openapi_for(config: &ServeArgs) -> utoipa::openapi::OpenApi {
     let (_, mut spec) = super::documented().split_for_parts();
     add_shared_responses(&mut spec);
+    state_configured_limits(&mut spec, config);
     spec
+}
+
+/// The bounds that are settings of the server rather than constants of the code.
+pub fn state_configured_limits(spec: &mut utoipa::openapi::OpenApi, config: &ServeArgs) {
+    let experiments = config.max_experiments.min(crate::surrogate::MAX_EXPERIMENTS);
+    set_maximum(spec, "CalibrationRequest", "experiments", experiments);
+    set_maximum(spec, "ExceedanceRequest", "samples", config.max_samples.min(crate::analysis::MAX_SAMPLES));
+}
+
+fn set_maximum(spec: &mut utoipa::openapi::OpenApi, schema: &str, property: &str, maximum: usize) {
+    let schemas = spec.components.as_mut().map(|c| &mut c.schemas);
+    let Some(RefOr::T(Schema::Object(object))) = schemas.and_then(|s| s.get_mut(schema)) else {
+        panic!("the API description has no schema {schema}");
+    };
+    let Some(RefOr::T(Schema::Object(field))) = object.properties.get_mut(property) else {
+        panic!("{schema} has no property {property}");
+    };
+    field.maximum = Some((maximum as f64).into());
 }
 
 /// A shared error response: problem details with the given description.
@@ -66,11 +94,26 @@ pub fn add_shared_responses(spec: &mut utoipa::openapi::OpenApi) {
     for (name, description) in shared {
         components.responses.insert(name.to_string(), RefOr::T(problem(description)));
     }
+    components.schemas.insert("OperationEvent".to_string(), RefOr::T(crate::service::schema::operation_event_schema()));
+    describe_event_stream(spec);
     for (path, item) in spec.paths.paths.iter_mut() {
         let operations = [&mut item.get, &mut item.post, &mut item.delete, &mut item.put, &mut item.patch];
         for operation in operations.into_iter().flatten() {
             add_to_operation(path, operation);
         }
+    }
+}
+
+/// The event stream's records are `OperationEvent`s (the derive can only call the stream a string).
+fn describe_event_stream(spec: &mut utoipa::openapi::OpenApi) {
+    let events = spec.paths.paths.get_mut("/v1/operations/{id}/events").and_then(|item| item.get.as_mut());
+    let stream =
+        events.and_then(|operation| operation.responses.responses.get_mut("200")).and_then(|response| match response {
+            RefOr::T(response) => response.content.get_mut("text/event-stream"),
+            RefOr::Ref(_) => None,
+        });
+    if let Some(RefOr::T(content)) = stream {
+        content.schema = Some(RefOr::Ref(Ref::from_schema_name("OperationEvent")));
     }
 }
 
