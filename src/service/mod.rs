@@ -13,7 +13,7 @@ mod store;
 
 pub use config::{Role, ServeArgs};
 pub use routes::{openapi, openapi_for};
-#[doc(hidden)]
+#[cfg(any(test, feature = "test-support"))]
 pub use store::testing;
 
 use crate::error::{Error, Result};

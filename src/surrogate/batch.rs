@@ -16,18 +16,15 @@
 //! mixes lanes, so a lane's result does not depend on the instruction set or on which samples share
 //! its batch.
 
+pub use super::lanes::{LANES, Lanes};
 use super::narx::{DIVERGENCE_BOUND, NarxTerm, diverged, rest_output};
 use super::simd::{self, Vector};
 use crate::error::{Error, Result};
 use crate::wind::{CoarseModalForces, CoarseSeries, CubicSchedule, ModalForces};
 use std::cell::RefCell;
 
-/// Samples per batch: one AVX-512 register of f64, two AVX2 ones.
-pub const LANES: usize = 8;
 /// Steps per block: the granularity of the divergence test and of [`Sink::Blocks`].
 const BLOCK: usize = 512;
-
-pub type Lanes = [f64; LANES];
 
 /// Where a sample's modal forces come from.
 pub trait ForceSource: Sync {

@@ -4,8 +4,8 @@
 use super::Parametrization;
 use super::batch::{self, BatchError, BatchSample, ForceSource, LANES, Lanes, ModeProgram, Sink};
 use super::narx::NarxTerm;
+use super::options::CalibrationOptions;
 use super::pce::SparsePce;
-use super::{CalibrationOptions, ModeDiagnostics};
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
 use serde::{Deserialize, Serialize};
@@ -56,6 +56,29 @@ pub struct ModalBasis {
     pub modal_masses_kg: Vec<f64>,
     /// shapes[mode][floor].
     pub shapes: Vec<Vec<f64>>,
+}
+
+/// What the calibration measured about one mode.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct ModeDiagnostics {
+    pub mode: usize,
+    pub selected_terms: Vec<String>,
+    pub candidate_structures: usize,
+    /// Mean free-run relative error of the one-step fits of the chosen structure (selection set).
+    pub structure_error: f64,
+    /// NARX only: mean over experiments of the free-run relative error with each experiment's own
+    /// refined coefficients.
+    pub narx_mean_relative_error: f64,
+    /// Full PC-NARX: the same with the coefficients and the static level from their expansions.
+    pub pc_narx_mean_relative_error: f64,
+    /// Corrected leave-one-out error of the static level's expansion.
+    pub static_level_loo_error: f64,
+    /// Corrected leave-one-out error of each coefficient's expansion.
+    pub coefficient_loo_errors: Vec<f64>,
+    /// Terms kept in each coefficient's expansion.
+    pub coefficient_pce_terms: Vec<usize>,
+    /// Experiments whose free run diverged; their error is infinite, so the means above show it.
+    pub diverged_experiments: usize,
 }
 
 /// How the metamodel came about and how well it fits its own experiments.

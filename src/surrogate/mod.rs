@@ -5,17 +5,25 @@ pub mod batch;
 mod calibrate;
 mod cost;
 pub mod identify;
+mod lanes;
 pub mod lars;
 mod metamodel;
 pub mod narx;
+mod options;
 mod parametrization;
 pub mod pce;
 pub mod phases;
+mod progress;
 mod simd;
 
-pub use batch::{ForceSource, LANES};
-pub use calibrate::{CalibrationOptions, MAX_EXPERIMENTS, ModeDiagnostics, Observer, Progress, Silent, calibrate};
+pub use batch::ForceSource;
+pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};
 pub use identify::Refinement;
-pub use metamodel::{CalibrationSummary, Metamodel, ModalBasis, ModeModel, StageSeconds, StaticResponse};
+pub use lanes::LANES;
+pub use metamodel::{
+    CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds, StaticResponse,
+};
+pub use options::{CalibrationOptions, MAX_EXPERIMENTS};
 pub use parametrization::Parametrization;
+pub use progress::{Observer, Progress, Silent};

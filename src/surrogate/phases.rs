@@ -12,13 +12,15 @@
 //! 4 MB); every other experiment is reduced to its coefficients as soon as it has run.
 
 use super::Parametrization;
-use super::calibrate::{CalibrationOptions, ModeDiagnostics, Observer, Progress};
 use super::identify::{Record, StructureChoice, least_squares, refine, select_structure, simulate};
 use super::metamodel::{
-    CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeModel, StageSeconds, StaticResponse,
+    CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds,
+    StaticResponse,
 };
 use super::narx::relative_error;
+use super::options::CalibrationOptions;
 use super::pce::SparsePce;
+use super::progress::{Observer, Progress};
 use crate::cancel::Cancel;
 use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};

@@ -10,7 +10,7 @@
 //! The x86 types call instructions the processor may lack: they are only used inside functions
 //! compiled for those features and called after the features were detected (`batch::dispatch`).
 
-use super::batch::{LANES, Lanes};
+use super::lanes::{LANES, Lanes};
 
 /// Lane-wise arithmetic on eight f64.
 pub trait Vector: Copy {

@@ -1,0 +1,62 @@
+//! What a calibration is asked to do besides the study: the design's size and seed, the NARX
+//! dictionary, the expansions, the refinement, with the paper's values as defaults.
+
+use super::Parametrization;
+use super::identify::Refinement;
+use super::narx::NarxOptions;
+use super::pce::PceOptions;
+use crate::error::{Error, Result};
+use crate::problem::WindPath;
+use serde::{Deserialize, Serialize};
+
+/// Everything about a calibration that is not the study itself; the defaults are the paper's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct CalibrationOptions {
+    /// Experiments K of the Latin-hypercube design.
+    pub experiments: usize,
+    pub seed: u64,
+    pub narx: NarxOptions,
+    pub pce: PceOptions,
+    pub refinement: Refinement,
+    /// Experiments on which candidate structures are compared (evenly spread over the design).
+    pub selection_experiments: usize,
+    /// How the experiments' wind is generated.
+    pub wind: WindPath,
+    /// What the expansions are of; by default the stable gains whenever the experiments admit them.
+    pub parametrization: Option<Parametrization>,
+}
+
+impl Default for CalibrationOptions {
+    fn default() -> Self {
+        CalibrationOptions {
+            experiments: 200,
+            seed: 1,
+            narx: NarxOptions::default(),
+            pce: PceOptions::default(),
+            refinement: Refinement::LevenbergMarquardt,
+            selection_experiments: 20,
+            wind: WindPath::Modal,
+            parametrization: None,
+        }
+    }
+}
+
+/// Most experiments a calibration may ask for.
+pub const MAX_EXPERIMENTS: usize = 5000;
+
+impl CalibrationOptions {
+    pub fn validate(&self) -> Result<()> {
+        if !(4..=MAX_EXPERIMENTS).contains(&self.experiments) {
+            return Err(Error::invalid(
+                "experiments",
+                format!("must be between 4 and {MAX_EXPERIMENTS}, got {}", self.experiments),
+            ));
+        }
+        if self.selection_experiments == 0 {
+            return Err(Error::invalid("selection_experiments", "must be at least 1"));
+        }
+        self.narx.validate()?;
+        self.pce.validate()
+    }
+}
