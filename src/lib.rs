@@ -12,11 +12,13 @@
 
 pub mod analysis;
 pub mod cancel;
+#[cfg(feature = "cli")]
 pub mod cli;
 pub mod dynamics;
 pub mod error;
 mod linalg;
 pub mod problem;
+#[cfg(feature = "service")]
 pub mod service;
 pub mod structure;
 pub mod surrogate;

@@ -21,7 +21,8 @@ pub const PRESETS: [&str; 2] = ["frame40", "frame40-kn"];
 
 /// A study as it arrives from a file or a request; every field is optional, with the paper's values
 /// as defaults.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(default, deny_unknown_fields)]
 pub struct ProblemSpec {
     /// A preset name; ignored for the structure when `structure` is given.
@@ -52,7 +53,8 @@ pub struct PhysicalParameters {
 }
 
 /// How the wind of a reference run is generated.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum WindPath {
     /// Every floor's speed, then Q = Φᵀ f.
@@ -62,7 +64,8 @@ pub enum WindPath {
 }
 
 /// Which reference model integrates the storm.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Order {
     Reduced,

@@ -12,7 +12,8 @@ use statrs::distribution::{Beta, ContinuousCDF};
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// An empirical exceedance curve with its band.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ExceedanceCurve {
     pub thresholds: Vec<f64>,
     /// Fraction of samples whose peak exceeds each threshold.

@@ -17,44 +17,46 @@ pub const MAX_DAMPER_GROUPS: usize = 10;
 pub const MAX_DAMPERS: usize = 4 * MAX_FLOORS;
 
 /// A damper of a custom layout, in the terms a user writes down.
-#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct CustomDamper {
     /// Upper floor of the damper (1-based); it joins this floor to the one below (or the ground).
-    #[schema(minimum = 1, maximum = 200)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 200))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub floor: usize,
     /// Coefficient group (1-based): dampers of a group share the input `damper_c{group}`.
-    #[schema(minimum = 1, maximum = 10)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 10))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub group: usize,
     /// Cosine of the brace angle to the horizontal (1 for a horizontal damper).
-    #[schema(exclusive_minimum = 0, maximum = 1)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 1))]
     pub cos_angle: f64,
 }
 
 /// A custom structure as it arrives in a file or a request body.
-#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema, PartialEq)]
+#[derive(Debug, Clone, Serialize, Deserialize, PartialEq)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct CustomStructure {
     /// Mass matrix (kg), one row per floor from the ground up; square, at most 200 floors.
-    #[schema(min_items = 1, max_items = 200)]
+    #[cfg_attr(feature = "openapi", schema(min_items = 1, max_items = 200))]
     pub mass: Vec<Vec<f64>>,
     /// Lateral stiffness matrix (N/m) at `reference_youngs_modulus`; square, as `mass`.
-    #[schema(min_items = 1, max_items = 200)]
+    #[cfg_attr(feature = "openapi", schema(min_items = 1, max_items = 200))]
     pub stiffness: Vec<Vec<f64>>,
     /// Elevation of each floor (m), increasing.
-    #[schema(min_items = 1, max_items = 200)]
+    #[cfg_attr(feature = "openapi", schema(min_items = 1, max_items = 200))]
     pub floor_elevations_m: Vec<f64>,
     /// Façade width of each floor exposed to the wind (m).
-    #[schema(min_items = 1, max_items = 200)]
+    #[cfg_attr(feature = "openapi", schema(min_items = 1, max_items = 200))]
     pub floor_widths_m: Vec<f64>,
     /// The Young's modulus at which `stiffness` holds; the input `youngs_modulus` scales it.
     #[serde(default = "default_modulus")]
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub reference_youngs_modulus: f64,
     #[serde(default)]
-    #[schema(max_items = 800)]
+    #[cfg_attr(feature = "openapi", schema(max_items = 800))]
     pub dampers: Vec<CustomDamper>,
 }
 

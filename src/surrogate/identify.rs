@@ -170,7 +170,8 @@ pub fn simulation_error(terms: &[NarxTerm], theta: &[f64], record: &Record) -> f
 }
 
 /// The structure chosen for one mode, and how it was chosen.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct StructureChoice {
     pub terms: Vec<NarxTerm>,
     /// Mean free-run relative error of the one-step fits of the chosen structure.
@@ -267,7 +268,8 @@ pub fn select_structure(
 }
 
 /// How the coefficients are refined on the simulation error.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Refinement {
     /// Levenberg-Marquardt with forward sensitivities of the recursion.

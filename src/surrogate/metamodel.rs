@@ -14,7 +14,8 @@ pub const FORMAT: &str = "windmeta-pc-narx";
 pub const FORMAT_VERSION: u32 = 1;
 
 /// The PC-NARX model of one modal coordinate.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ModeModel {
     /// Selected NARX terms, in the order of `coefficients`.
     pub terms: Vec<NarxTerm>,
@@ -33,7 +34,8 @@ pub struct ModeModel {
 }
 
 /// How the static modal displacement of a sample is predicted.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct StaticResponse {
     /// When true the expansion is of the static gain y_static / Q̄ (m/N), multiplied by the
     /// sample's own mean modal force, which carries the wind speed exactly; when false (some
@@ -50,7 +52,8 @@ impl StaticResponse {
 }
 
 /// Roof-normalised modes the metamodel was calibrated on (shapes fixed across samples).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ModalBasis {
     pub frequencies_rad_s: Vec<f64>,
     pub modal_masses_kg: Vec<f64>,
@@ -59,7 +62,8 @@ pub struct ModalBasis {
 }
 
 /// What the calibration measured about one mode.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ModeDiagnostics {
     pub mode: usize,
     pub selected_terms: Vec<String>,
@@ -82,7 +86,8 @@ pub struct ModeDiagnostics {
 }
 
 /// How the metamodel came about and how well it fits its own experiments.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CalibrationSummary {
     pub options: CalibrationOptions,
     pub modes: Vec<ModeDiagnostics>,
@@ -96,7 +101,8 @@ pub struct CalibrationSummary {
 
 /// Wall time of each stage (s). With the experiments spread over several replicas, the
 /// coefficients stage is the fan-out's wall time.
-#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct StageSeconds {
     /// The selection experiments through the reference.
     pub experiments: f64,
@@ -110,7 +116,8 @@ pub struct StageSeconds {
 }
 
 /// A calibrated PC-NARX metamodel.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct Metamodel {
     pub format: String,
     pub version: u32,

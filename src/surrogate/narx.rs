@@ -12,7 +12,8 @@ use std::fmt;
 /// One candidate term y(t − output_lag)^output_power · Q(t − input_lag)^input_power (Eq. 18); all
 /// powers zero is the constant. With `output_mode` set, the output factor is another mode's
 /// displacement: the dampers couple the modes, which a single-input model cannot see.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct NarxTerm {
     pub output_lag: usize,
     pub output_power: u32,
@@ -94,34 +95,35 @@ impl fmt::Display for NarxTerm {
 
 /// The full NARX model to select from. The defaults are the paper's: l₁ + l₂ ≤ 3, l₂ ≤ 1,
 /// n_y = 1, 2 and n_Q = 0, 1, 2, without cross products: 10 candidates.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(default, deny_unknown_fields)]
 pub struct NarxOptions {
     /// Largest total degree l₁ + l₂ of a term.
-    #[schema(minimum = 1, maximum = 5)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 5))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub max_degree: u32,
     /// Output lags 1 ..= output_lags.
-    #[schema(minimum = 1, maximum = 10)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 10))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub output_lags: usize,
     /// Input lags 0 ..= input_lags.
-    #[schema(minimum = 0, maximum = 10)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 0, maximum = 10))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub input_lags: usize,
     /// Largest power of the input in a term (at most `max_degree`).
-    #[schema(minimum = 1, maximum = 5)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 5))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub max_input_power: u32,
     /// Whether products of an output power and an input power are candidates.
     pub cross_terms: bool,
     /// Most terms in a selected model (the constant included).
-    #[schema(minimum = 2, maximum = 30)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 2, maximum = 30))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub max_terms: usize,
     /// Lags 1 ..= coupling_lags of every other retained mode's displacement as candidates (0: each
     /// mode on its own, as in the paper).
-    #[schema(minimum = 0, maximum = 10)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 0, maximum = 10))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub coupling_lags: usize,
 }

@@ -10,7 +10,8 @@ use crate::problem::WindPath;
 use serde::{Deserialize, Serialize};
 
 /// Everything about a calibration that is not the study itself; the defaults are the paper's.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(default, deny_unknown_fields)]
 pub struct CalibrationOptions {
     /// Experiments K of the Latin-hypercube design.

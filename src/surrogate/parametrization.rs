@@ -15,7 +15,8 @@ use super::narx::NarxTerm;
 use serde::{Deserialize, Serialize};
 
 /// How NARX coefficients map to the expanded ones.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Parametrization {
     /// The NARX coefficients themselves (the paper's choice).

@@ -14,26 +14,27 @@ use crate::uncertainty::{InputModel, StandardSpace};
 use serde::{Deserialize, Serialize};
 
 /// Options of the sparse expansion; the defaults are the paper's (q = 1, interaction rank 2).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(default, deny_unknown_fields)]
 pub struct PceOptions {
     /// Largest total degree tried.
-    #[schema(minimum = 1, maximum = 20)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 20))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub max_degree: usize,
     /// q of the hyperbolic truncation (1 = total degree).
-    #[schema(exclusive_minimum = 0, maximum = 1)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 1))]
     pub q_norm: f64,
     /// Most inputs in one polynomial term.
-    #[schema(minimum = 1, maximum = 14)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 14))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub max_interaction: usize,
     /// Stop raising the degree after this many degrees without improvement.
-    #[schema(minimum = 1, maximum = 20)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 20))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub degree_early_stop: usize,
     /// Stop a LARS path after this many steps without a better corrected LOO error.
-    #[schema(minimum = 1, maximum = 1000)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 1000))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub lars_early_stop: usize,
 }
@@ -95,12 +96,13 @@ impl PceOptions {
 pub type Term = Vec<(usize, usize)>;
 
 /// A fitted sparse expansion.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct SparsePce {
     /// Polynomial family of each input (by the input model's order); `fixed` inputs take no part.
     pub families: Vec<StandardSpace>,
     /// The retained terms, each a list of [input index, degree] pairs; the empty term is the constant.
-    #[schema(value_type = Vec<Vec<Vec<u64>>>)]
+    #[cfg_attr(feature = "openapi", schema(value_type = Vec<Vec<Vec<u64>>>))]
     pub terms: Vec<Term>,
     pub coefficients: Vec<f64>,
     /// Total degree of the candidate basis the terms were chosen from.

@@ -4,7 +4,8 @@
 use serde::{Deserialize, Serialize};
 
 /// Where a calibration is; reported to an observer as it goes.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(tag = "stage", rename_all = "snake_case")]
 pub enum Progress {
     /// Experiments through the reference (and, after the structures, their NARX fits).

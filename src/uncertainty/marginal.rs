@@ -7,7 +7,8 @@ use statrs::distribution::{ContinuousCDF, Normal};
 use statrs::function::gamma::gamma;
 
 /// A marginal distribution.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(tag = "distribution", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Marginal {
     Normal {
@@ -34,7 +35,8 @@ pub enum Marginal {
 }
 
 /// The standard variable a marginal maps to, which fixes the orthonormal polynomial family.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum StandardSpace {
     /// ξ ~ N(0, 1): Hermite polynomials.

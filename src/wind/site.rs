@@ -5,45 +5,46 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Everything about the wind that is not uncertain. Defaults are the paper's (section 4.2, App. 1).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, utoipa::ToSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(default, deny_unknown_fields)]
 pub struct WindSite {
     /// Roughness length at the site, z₀ (m).
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub site_roughness_m: f64,
     /// Roughness length at the meteorological station, z₀₁ (m).
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub station_roughness_m: f64,
     /// Height of the station's anemometer, H_met (m); above its roughness length.
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub station_height_m: f64,
     /// β of Eq. (20).
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub shear_factor: f64,
     /// Von Kármán's constant k_a.
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub von_karman: f64,
     /// C_z of the coherence, Eq. (22).
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub coherence_decay: f64,
     /// Air density ρ (kg/m³).
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub air_density_kg_m3: f64,
     /// Quasi-steady pressure coefficient C̄.
-    #[schema(exclusive_minimum = 0)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub pressure_coefficient: f64,
     /// Cut-off frequency ω_up (rad/s); the wind has no energy above 2π rad/s, and at most 60.
-    #[schema(exclusive_minimum = 0, maximum = 60)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 60))]
     pub cutoff_rad_s: f64,
     /// Frequencies per component, N (81 920 phases for 40 floors means 2048).
-    #[schema(minimum = 16, maximum = 65536)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 16, maximum = 65536))]
     #[serde(deserialize_with = "crate::whole::count")]
     pub frequencies: usize,
     /// Time step on which the wind (the full floor field, or the modal forces directly) is
     /// generated before cubic interpolation to the storm's time step (s); it must resolve the
     /// cut-off (≤ π/ω_up), be at least 1 ms, and keep the generation transform within 2²² points
     /// (2πN/(ω_up·step) ≤ 4 194 304).
-    #[schema(minimum = 0.001)]
+    #[cfg_attr(feature = "openapi", schema(minimum = 0.001))]
     pub field_generation_step_s: f64,
 }
 
