@@ -13,8 +13,8 @@ mod tasks;
 pub use jobs::{Enqueued, JobRow, MAX_ATTEMPTS};
 pub use tasks::TaskRow;
 
-use sqlx::any::{AnyPoolOptions, install_default_drivers};
 use sqlx::AnyPool;
+use sqlx::any::{AnyPoolOptions, install_default_drivers};
 use std::time::{SystemTime, UNIX_EPOCH};
 
 pub fn now_ms() -> i64 {
