@@ -16,12 +16,12 @@ use axum::response::{IntoResponse, Response as HttpResponse};
 use serde::Serialize;
 use std::sync::Arc;
 use std::time::Duration;
-
-/// Seconds a client should wait before offering a synchronous request again.
-const BUSY_RETRY_S: u64 = 1;
 use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
+
+/// Seconds a client should wait before offering a synchronous request again.
+const BUSY_RETRY_S: u64 = 1;
 
 pub fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
