@@ -17,6 +17,7 @@ pub mod cli;
 pub mod dynamics;
 pub mod error;
 mod linalg;
+mod optimise;
 pub mod problem;
 #[cfg(feature = "service")]
 pub mod service;

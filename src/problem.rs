@@ -10,7 +10,7 @@ use crate::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::structure::{CustomStructure, Modes, Structure, frame40};
 use crate::uncertainty::{Input, InputModel, Marginal, Rng, rng_from_seed, stream_seed};
-use crate::wind::{CoarseModalForces, ModalForces, ModalWind, StormGrid, WindLoads, WindSite};
+use crate::wind::{CoarseModalForces, ModalForces, ModalWind, StormGrid, WindLoads, WindSite, Workspace};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -273,33 +273,41 @@ impl Problem {
         Dampers::new(&self.structure, &p.damper_coefficients, self.damper_exponent)
     }
 
-    /// A storm's modal forces on the wind's generation grid, by the fast path or the full field.
-    pub fn coarse_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<CoarseModalForces> {
+    /// A storm's modal forces on the wind's generation grid, by the fast path or the full field,
+    /// with the transforms of `workspace`.
+    pub fn coarse_forces(
+        &self,
+        p: &PhysicalParameters,
+        path: WindPath,
+        workspace: &mut Workspace,
+        rng: &mut Rng,
+    ) -> Result<CoarseModalForces> {
         match path {
-            WindPath::Modal => self.modal_wind.simulate(p.wind_speed, self.storm.duration, rng),
+            WindPath::Modal => self.modal_wind.simulate(p.wind_speed, self.storm.duration, workspace, rng),
             WindPath::Field => {
-                self.wind.projected_field(p.wind_speed, self.modes.shapes.as_ref(), self.storm.duration, rng)
+                self.wind.projected_field(p.wind_speed, self.modes.shapes.as_ref(), self.storm.duration, workspace, rng)
             }
         }
     }
 
     /// A storm's modal forces on the storm's grid.
     pub fn modal_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<ModalForces> {
-        Ok(self.coarse_forces(p, path, rng)?.on_grid(&self.storm))
+        Ok(self.coarse_forces(p, path, &mut Workspace::default(), rng)?.on_grid(&self.storm))
     }
 
     /// Sample k of a run seeded with `seed`: its physical parameters and its storm's modal forces on
     /// the generation grid. The storm depends only on (seed, k), whichever thread draws it and
-    /// however many there are.
+    /// however many there are. `workspace` holds the wind's transforms; keep one per thread.
     pub fn sample_storm(
         &self,
         x: &[f64],
         path: WindPath,
         seed: u64,
         k: usize,
+        workspace: &mut Workspace,
     ) -> Result<(PhysicalParameters, CoarseModalForces)> {
         let p = self.parameters(x)?;
-        let forces = self.coarse_forces(&p, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
+        let forces = self.coarse_forces(&p, path, workspace, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
         Ok((p, forces))
     }
 

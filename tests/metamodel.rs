@@ -15,6 +15,7 @@ use windmeta::analysis::{Response, exceedance_curve, metamodel_peaks, validate};
 use windmeta::problem::{Problem, WindPath};
 use windmeta::surrogate::{CalibrationOptions, Metamodel, Parametrization, Silent, calibrate};
 use windmeta::uncertainty::rng_from_seed;
+use windmeta::wind::Workspace;
 
 fn calibrated() -> &'static (Metamodel, Problem) {
     static MODEL: OnceLock<(Metamodel, Problem)> = OnceLock::new();
@@ -209,7 +210,7 @@ fn batched_peaks_equal_the_peaks_of_the_histories() {
         let peaks = metamodel_peaks(metamodel, problem, &problem.inputs, 11, 3, response, &Silent).unwrap();
         let xs = windmeta::uncertainty::monte_carlo(&problem.inputs, 11, &mut rng_from_seed(3));
         for (k, (x, peak)) in xs.iter().zip(&peaks).enumerate() {
-            let (_, coarse) = problem.sample_storm(x, WindPath::Modal, 3, k).unwrap();
+            let (_, coarse) = problem.sample_storm(x, WindPath::Modal, 3, k, &mut Workspace::default()).unwrap();
             let histories = metamodel.predict(problem, x, &coarse.on_grid(&problem.storm)).unwrap();
             let expected = response.peak(&metamodel.modes.shapes, &histories);
             assert!((peak - expected).abs() <= 1e-12 * expected, "sample {k}: {peak} vs {expected}");

@@ -4,8 +4,9 @@
 use super::Response;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::surrogate::{ForceSource, LANES, Metamodel, Observer, Progress};
+use crate::surrogate::{BatchWorkspace, LANES, Metamodel, Observer, Progress};
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
+use crate::wind::{self, ForceSource};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{Beta, ContinuousCDF};
@@ -117,27 +118,30 @@ pub fn metamodel_peaks(
     let peaks: Vec<Vec<f64>> = xs
         .par_chunks(LANES)
         .enumerate()
-        .map(|(chunk, xs)| {
-            if observer.cancelled() {
-                return Err(Error::Cancelled);
-            }
-            let first = chunk * LANES;
-            let storms = xs
-                .iter()
-                .enumerate()
-                .map(|(i, x)| Ok(problem.sample_storm(x, path, seed, first + i)?.1))
-                .collect::<Result<Vec<_>>>()?;
-            let batch: Vec<(usize, &[f64], &dyn ForceSource)> = xs
-                .iter()
-                .zip(&storms)
-                .enumerate()
-                .map(|(i, (x, f))| (first + i, &x[..], f as &dyn ForceSource))
-                .collect();
-            let peaks = metamodel.peaks(problem, &batch, &weights)?;
-            let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();
-            observer.progress(Progress::Samples { done, total: samples });
-            Ok(peaks)
-        })
+        .map_init(
+            || (wind::Workspace::default(), BatchWorkspace::default()),
+            |(wind_workspace, batch_workspace), (chunk, xs)| {
+                if observer.cancelled() {
+                    return Err(Error::Cancelled);
+                }
+                let first = chunk * LANES;
+                let storms = xs
+                    .iter()
+                    .enumerate()
+                    .map(|(i, x)| Ok(problem.sample_storm(x, path, seed, first + i, wind_workspace)?.1))
+                    .collect::<Result<Vec<_>>>()?;
+                let batch: Vec<(usize, &[f64], &dyn ForceSource)> = xs
+                    .iter()
+                    .zip(&storms)
+                    .enumerate()
+                    .map(|(i, (x, f))| (first + i, &x[..], f as &dyn ForceSource))
+                    .collect();
+                let peaks = metamodel.peaks(problem, &batch, &weights, batch_workspace)?;
+                let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();
+                observer.progress(Progress::Samples { done, total: samples });
+                Ok(peaks)
+            },
+        )
         .collect::<Result<_>>()?;
     Ok(peaks.concat())
 }

@@ -10,6 +10,7 @@ use crate::problem::Problem;
 use crate::surrogate::narx::relative_error;
 use crate::surrogate::{Metamodel, Observer, Progress};
 use crate::uncertainty::{monte_carlo, rng_from_seed};
+use crate::wind::Workspace;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -81,11 +82,11 @@ pub fn validate(
     let results: Vec<SampleResult> = xs
         .par_iter()
         .enumerate()
-        .map(|(k, x)| {
+        .map_init(Workspace::default, |workspace, (k, x)| {
             if observer.cancelled() {
                 return Err(Error::Cancelled);
             }
-            let (p, coarse) = problem.sample_storm(x, path, seed, k)?;
+            let (p, coarse) = problem.sample_storm(x, path, seed, k, workspace)?;
             let forces = coarse.on_grid(&problem.storm);
             let started = Instant::now();
             let reference = integrate_reduced(

@@ -8,8 +8,9 @@ use crate::cancel::Never;
 use crate::dynamics::{FullSystem, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::surrogate::{CalibrationOptions, ForceSource, LANES, Metamodel, Silent, calibrate};
+use crate::surrogate::{BatchWorkspace, CalibrationOptions, LANES, Metamodel, Silent, calibrate};
 use crate::uncertainty::rng_from_seed;
+use crate::wind::{ForceSource, Workspace};
 use clap::Args;
 use serde::Serialize;
 use std::time::Instant;
@@ -133,7 +134,9 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
     let dampers = p.dampers(&params)?;
     let dt = p.storm.time_step;
     let floor_forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(1))?;
-    let coarse = p.modal_wind.simulate(params.wind_speed, p.storm.duration, &mut rng_from_seed(1))?;
+    let mut wind_workspace = Workspace::default();
+    let coarse =
+        p.modal_wind.simulate(params.wind_speed, p.storm.duration, &mut wind_workspace, &mut rng_from_seed(1))?;
     let modal_forces = coarse.on_grid(&p.storm);
     let modes = p.sample_modes(&params);
     let system = FullSystem::new(
@@ -156,15 +159,17 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
         let field = time(repetitions, |r| {
             Ok(p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(r))?.project(shapes))
         })?;
-        let modal_coarse =
-            time(repetitions, |r| p.modal_wind.simulate(params.wind_speed, p.storm.duration, &mut rng_from_seed(r)))?;
+        let modal_coarse = time(repetitions, |r| {
+            p.modal_wind.simulate(params.wind_speed, p.storm.duration, &mut wind_workspace, &mut rng_from_seed(r))
+        })?;
         let modal_grid =
             time(repetitions, |r| p.modal_wind.forces(params.wind_speed, &p.storm, &mut rng_from_seed(r)))?;
         let reduced = time(repetitions, |_| {
             integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, dt, &Never)
         })?;
         let full = time(repetitions, |_| integrate_full(&system, &dampers, &floor_forces, dt, &Never))?;
-        let metamodel_batch = time(repetitions, |_| metamodel.peaks(p, &batch, &weights))?;
+        let mut workspace = BatchWorkspace::default();
+        let metamodel_batch = time(repetitions, |_| metamodel.peaks(p, &batch, &weights, &mut workspace))?;
         let per_metamodel = metamodel_batch / LANES as f64;
         let rows = vec![
             row("per sample: wind, full field (40 floors) + projection", field),

@@ -1,11 +1,11 @@
-//! NARX identification from input/output records: one-step-ahead regressors for LARS, least squares
-//! on a structure, and the refinement of the coefficients on the simulation error (Eq. 11).
+//! NARX identification from input/output records: one-step-ahead regressors for LARS, the
+//! structure selection, and least squares on a structure (directly or from a compressed
+//! dictionary). The refinement on the simulation error (Eq. 11) is in `refine`.
 
 use super::lars::lars_path;
 use super::narx::{Exogenous, NarxTerm, free_run, regressors, relative_error, rest_output};
 use crate::cancel::{Cancel, check};
 use crate::error::{Error, Result};
-use crate::linalg::{cholesky, cholesky_solve};
 use faer::prelude::SolveLstsq;
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
@@ -31,11 +31,11 @@ impl Record {
     }
 
     /// The measured rests of the other modes: the reference starts at rest.
-    fn output_rests(&self) -> Vec<f64> {
+    pub(super) fn output_rests(&self) -> Vec<f64> {
         self.outputs.iter().map(|o| o[0]).collect()
     }
 
-    fn output_slices(&self) -> Vec<&[f64]> {
+    pub(super) fn output_slices(&self) -> Vec<&[f64]> {
         self.outputs.iter().map(|o| &o[..]).collect()
     }
 }
@@ -267,239 +267,22 @@ pub fn select_structure(
     Ok(StructureChoice { terms, error, candidates: candidates.len() })
 }
 
-/// How the coefficients are refined on the simulation error.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
-#[serde(rename_all = "snake_case")]
-pub enum Refinement {
-    /// Levenberg-Marquardt with forward sensitivities of the recursion.
-    LevenbergMarquardt,
-    /// The paper's Nelder-Mead simplex.
-    NelderMead,
-    /// Keep the one-step-ahead least-squares coefficients.
-    None,
-}
-
-/// Refines `theta` on the sum of squared free-run errors over the record; each iteration (one
-/// free run of the record) checks `cancel`.
-pub fn refine(
-    method: Refinement,
-    terms: &[NarxTerm],
-    theta: Vec<f64>,
-    record: &Record,
-    cancel: &dyn Cancel,
-) -> Result<Vec<f64>> {
-    match method {
-        Refinement::LevenbergMarquardt => levenberg_marquardt(terms, theta, record, cancel),
-        Refinement::NelderMead => nelder_mead(terms, theta, record, cancel),
-        Refinement::None => Ok(theta),
-    }
-}
-
-fn sum_of_squares(terms: &[NarxTerm], theta: &[f64], record: &Record) -> f64 {
-    match simulate(terms, theta, record) {
-        Ok(y_hat) => record.y.iter().zip(&y_hat).map(|(a, b)| (a - b).powi(2)).sum(),
-        Err(_) => f64::INFINITY,
-    }
-}
-
-/// Free run with forward sensitivities s_i(t) = ∂ŷ(t)/∂θ_i:
-/// s_i(t) = g_i(t) + Σ_k θ_k ∂g_k/∂ŷ(t − l_k) s_i(t − l_k), and at rest
-/// s_i = g_i(y*) / (1 − Σ_k θ_k ∂g_k/∂y(y*)) since the rest state y* moves with θ.
-/// Returns the normal equations JᵀJ, Jᵀr of r = y − ŷ and the sum of squares, or None on divergence.
-fn sensitivities(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Option<(Vec<f64>, Vec<f64>, f64)> {
-    let p = terms.len();
-    let n = record.y.len();
-    let q_rest = record.q_rest;
-    let (slices, rests) = (record.output_slices(), record.output_rests());
-    let rest = rest_output(terms, theta, q_rest, &rests, record.y[0]).ok()?;
-    let mut y_hat = vec![0.0; n];
-    let mut s = vec![0.0; n * p];
-    let rest_output_of = |term: &NarxTerm| term.output_mode.map_or(rest, |j| rests[j]);
-    let slope: f64 = terms
-        .iter()
-        .zip(theta)
-        .filter(|(t, _)| t.reads_own_output())
-        .map(|(t, c)| c * t.output_derivative(rest, q_rest))
-        .sum();
-    let rest_sensitivity: Vec<f64> = terms.iter().map(|t| t.value(rest_output_of(t), q_rest) / (1.0 - slope)).collect();
-    y_hat[0] = rest;
-    s[..p].copy_from_slice(&rest_sensitivity);
-    let mut jtj = vec![0.0; p * p];
-    let mut jtr = vec![0.0; p];
-    let mut sse = 0.0;
-    let accumulate = |t: usize, s: &[f64], y_hat: &[f64], jtj: &mut [f64], jtr: &mut [f64], sse: &mut f64| {
-        let r = record.y[t] - y_hat[t];
-        *sse += r * r;
-        let row = &s[t * p..(t + 1) * p];
-        for i in 0..p {
-            jtr[i] += row[i] * r;
-            for j in 0..=i {
-                jtj[i * p + j] += row[i] * row[j];
-            }
-        }
-    };
-    accumulate(0, &s, &y_hat, &mut jtj, &mut jtr, &mut sse);
-    let mut row = vec![0.0; p];
-    for t in 1..n {
-        let mut value = 0.0;
-        row.fill(0.0);
-        for (k, (term, c)) in terms.iter().zip(theta).enumerate() {
-            let y_lag = match term.output_mode {
-                None if term.output_lag > t => rest,
-                None => y_hat[t - term.output_lag],
-                Some(j) if term.output_lag > t => rests[j],
-                Some(j) => slices[j][t - term.output_lag],
-            };
-            let q_lag = if term.input_lag > t { q_rest } else { record.q[t - term.input_lag] };
-            let g = term.value(y_lag, q_lag);
-            value += c * g;
-            row[k] += g;
-            if term.reads_own_output() {
-                let dg = c * term.output_derivative(y_lag, q_lag);
-                let source = t.saturating_sub(term.output_lag);
-                for i in 0..p {
-                    row[i] += dg * s[source * p + i];
-                }
-            }
-        }
-        if super::narx::diverged(value) {
-            return None;
-        }
-        y_hat[t] = value;
-        s[t * p..(t + 1) * p].copy_from_slice(&row);
-        accumulate(t, &s, &y_hat, &mut jtj, &mut jtr, &mut sse);
-    }
-    for i in 0..p {
-        for j in 0..i {
-            jtj[j * p + i] = jtj[i * p + j];
-        }
-    }
-    Some((jtj, jtr, sse))
-}
-
-/// Levenberg-Marquardt on the simulation error, scaled by diag(JᵀJ) (Marquardt's variant).
-fn levenberg_marquardt(terms: &[NarxTerm], theta: Vec<f64>, record: &Record, cancel: &dyn Cancel) -> Result<Vec<f64>> {
-    let p = terms.len();
-    let mut theta = theta;
-    let Some(mut current) = sensitivities(terms, &theta, record) else { return Ok(theta) };
-    let mut lambda = 1e-3;
-    for _ in 0..200 {
-        check(cancel)?;
-        let (jtj, jtr, sse) = &current;
-        let mut a = jtj.clone();
-        for i in 0..p {
-            a[i * p + i] += lambda * jtj[i * p + i].max(1e-300);
-        }
-        let mut step = jtr.clone();
-        if !cholesky(&mut a, p) {
-            lambda *= 10.0;
-            continue;
-        }
-        cholesky_solve(&a, p, &mut step);
-        let trial: Vec<f64> = theta.iter().zip(&step).map(|(t, d)| t + d).collect();
-        match sensitivities(terms, &trial, record) {
-            Some(next) if next.2 < *sse => {
-                let improvement = (sse - next.2) / sse;
-                theta = trial;
-                current = next;
-                lambda = (lambda / 3.0).max(1e-12);
-                if improvement < 1e-10 {
-                    break;
-                }
-            }
-            _ => {
-                lambda *= 4.0;
-                if lambda > 1e12 {
-                    break;
-                }
-            }
-        }
-    }
-    Ok(theta)
-}
-
-/// Nelder-Mead (reflection 1, expansion 2, contraction ½, shrink ½; MATLAB's fminsearch start
-/// simplex θ₀ + 5 % per coordinate), stopping when the simplex has collapsed to relative 10⁻¹⁰ in
-/// both coordinates and values, or after 200·n iterations.
-fn nelder_mead(terms: &[NarxTerm], theta: Vec<f64>, record: &Record, cancel: &dyn Cancel) -> Result<Vec<f64>> {
-    let n = theta.len();
-    let f = |x: &[f64]| sum_of_squares(terms, x, record);
-    let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
-    simplex.push((theta.clone(), f(&theta)));
-    for i in 0..n {
-        let mut x = theta.clone();
-        x[i] = if x[i] != 0.0 { x[i] * 1.05 } else { 0.00025 };
-        let v = f(&x);
-        simplex.push((x, v));
-    }
-    let centroid = |s: &[(Vec<f64>, f64)]| -> Vec<f64> {
-        (0..n).map(|j| s[..n].iter().map(|(x, _)| x[j]).sum::<f64>() / n as f64).collect()
-    };
-    let along = |c: &[f64], x: &[f64], t: f64| -> Vec<f64> { c.iter().zip(x).map(|(c, x)| c + t * (x - c)).collect() };
-    for _ in 0..200 * n {
-        check(cancel)?;
-        simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-        let best = simplex[0].1;
-        let spread_f = simplex.iter().map(|s| (s.1 - best).abs()).fold(0.0, f64::max);
-        let spread_x = simplex
-            .iter()
-            .flat_map(|s| s.0.iter().zip(&simplex[0].0).map(|(a, b)| (a - b).abs() / b.abs().max(1e-12)))
-            .fold(0.0, f64::max);
-        if spread_f <= 1e-10 * best.abs().max(1e-300) && spread_x <= 1e-10 {
-            break;
-        }
-        let c = centroid(&simplex);
-        let worst = simplex[n].clone();
-        let reflected = along(&c, &worst.0, -1.0);
-        let fr = f(&reflected);
-        if fr < simplex[0].1 {
-            let expanded = along(&c, &worst.0, -2.0);
-            let fe = f(&expanded);
-            simplex[n] = if fe < fr { (expanded, fe) } else { (reflected, fr) };
-        } else if fr < simplex[n - 1].1 {
-            simplex[n] = (reflected, fr);
-        } else {
-            let (contracted, fc) = if fr < worst.1 {
-                let x = along(&c, &reflected, 0.5);
-                let v = f(&x);
-                (x, v)
-            } else {
-                let x = along(&c, &worst.0, 0.5);
-                let v = f(&x);
-                (x, v)
-            };
-            if fc < worst.1.min(fr) {
-                simplex[n] = (contracted, fc);
-            } else {
-                let best_x = simplex[0].0.clone();
-                for s in simplex.iter_mut().skip(1) {
-                    s.0 = along(&best_x, &s.0, 0.5);
-                    s.1 = f(&s.0);
-                }
-            }
-        }
-    }
-    simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    Ok(simplex.swap_remove(0).0)
-}
-
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::cancel::Never;
     use crate::surrogate::narx::NarxOptions;
     use crate::uncertainty::rng_from_seed;
     use rand::RngExt;
 
-    fn arx() -> (Vec<NarxTerm>, Vec<f64>) {
+    pub(in crate::surrogate) fn arx() -> (Vec<NarxTerm>, Vec<f64>) {
         let terms =
             vec![NarxTerm::CONSTANT, NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(2, 1, None)];
         (terms, vec![0.002, 0.05, 1.6, -0.7])
     }
 
     /// Data from a known ARX(2) (exact, no noise) with a smooth random input.
-    fn record(theta: &[f64], terms: &[NarxTerm], seed: u64) -> Record {
+    pub(in crate::surrogate) fn record(theta: &[f64], terms: &[NarxTerm], seed: u64) -> Record {
         let mut rng = rng_from_seed(seed);
         let mut q = vec![0.0; 4000];
         let mut state = 0.0;
@@ -548,19 +331,5 @@ mod tests {
             }
         }
         assert!(compressed.least_squares(&[NarxTerm::output(7, 1, Some(2))]).is_err());
-    }
-
-    /// From perturbed coefficients both refinements return to the truth on the simulation error.
-    #[test]
-    fn refinements_recover_the_true_coefficients() {
-        let (terms, theta) = arx();
-        let data = record(&theta, &terms, 2);
-        let start: Vec<f64> = theta.iter().map(|v| v * 1.01).collect();
-        assert!(simulation_error(&terms, &start, &data) > 1e-3);
-        for method in [Refinement::LevenbergMarquardt, Refinement::NelderMead] {
-            let refined = refine(method, &terms, start.clone(), &data, &Never).unwrap();
-            let error = simulation_error(&terms, &refined, &data);
-            assert!(error < 1e-8, "{method:?}: error {error}, θ = {refined:?}");
-        }
     }
 }

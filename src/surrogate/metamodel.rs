@@ -2,12 +2,13 @@
 //! versioned.
 
 use super::Parametrization;
-use super::batch::{self, BatchError, BatchSample, ForceSource, LANES, Lanes, ModeProgram, Sink};
+use super::batch::{self, BatchError, BatchSample, LANES, Lanes, ModeProgram, Sink, Workspace};
 use super::narx::NarxTerm;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
+use crate::wind::ForceSource;
 use serde::{Deserialize, Serialize};
 
 pub const FORMAT: &str = "windmeta-pc-narx";
@@ -196,18 +197,28 @@ impl Metamodel {
                 out[m][first + k / modes] = levels[m] + lanes[0] * self.models[m].output_scale;
             }
         };
-        batch::run(&self.programs(), &samples, steps, problem.storm.time_step, &mut Sink::Blocks(&mut consume))
-            .map_err(|e| batch_error(e, &[None]))?;
+        let mut workspace = Workspace::default();
+        batch::run(
+            &self.programs(),
+            &samples,
+            steps,
+            problem.storm.time_step,
+            &mut workspace,
+            &mut Sink::Blocks(&mut consume),
+        )
+        .map_err(|e| batch_error(e, &[None]))?;
         Ok(out)
     }
 
     /// Peak |Σ_m w_m y_m(t)| over the storm for up to [`LANES`] samples run together, `samples[i]`
     /// = (its number in the request, its inputs, its forces); the number names a diverging sample.
+    /// `workspace` holds the batch's buffers; keep one per thread across calls.
     pub fn peaks(
         &self,
         problem: &Problem,
         samples: &[(usize, &[f64], &dyn ForceSource)],
         weights: &[f64],
+        workspace: &mut Workspace,
     ) -> Result<Vec<f64>> {
         let mut levels = Vec::with_capacity(samples.len());
         let mut batch = Vec::with_capacity(samples.len());
@@ -223,7 +234,7 @@ impl Metamodel {
         }
         let mut peaks = [0.0f64; LANES];
         let mut sink = Sink::Peaks { gains: &gains, offsets, peaks: &mut peaks };
-        batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, &mut sink)
+        batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, workspace, &mut sink)
             .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))?;
         Ok(peaks[..samples.len()].to_vec())
     }

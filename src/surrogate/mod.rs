@@ -14,12 +14,11 @@ mod parametrization;
 pub mod pce;
 pub mod phases;
 mod progress;
-mod simd;
+mod refine;
 
-pub use batch::ForceSource;
+pub use batch::Workspace as BatchWorkspace;
 pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};
-pub use identify::Refinement;
 pub use lanes::LANES;
 pub use metamodel::{
     CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds, StaticResponse,
@@ -27,3 +26,4 @@ pub use metamodel::{
 pub use options::{CalibrationOptions, MAX_EXPERIMENTS};
 pub use parametrization::Parametrization;
 pub use progress::{Observer, Progress, Silent};
+pub use refine::Refinement;

@@ -2,9 +2,9 @@
 //! dictionary, the expansions, the refinement, with the paper's values as defaults.
 
 use super::Parametrization;
-use super::identify::Refinement;
 use super::narx::NarxOptions;
 use super::pce::PceOptions;
+use super::refine::Refinement;
 use crate::error::{Error, Result};
 use crate::problem::WindPath;
 use serde::{Deserialize, Serialize};

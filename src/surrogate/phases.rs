@@ -12,7 +12,7 @@
 //! 4 MB); every other experiment is reduced to its coefficients as soon as it has run.
 
 use super::Parametrization;
-use super::identify::{Record, StructureChoice, least_squares, refine, select_structure, simulate};
+use super::identify::{Record, StructureChoice, least_squares, select_structure, simulate};
 use super::metamodel::{
     CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds,
     StaticResponse,
@@ -21,11 +21,13 @@ use super::narx::relative_error;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
 use super::progress::{Observer, Progress};
+use super::refine::refine;
 use crate::cancel::Cancel;
 use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::uncertainty::{latin_hypercube, rng_from_seed};
+use crate::wind::Workspace;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -81,9 +83,10 @@ impl Experiment {
         options: &CalibrationOptions,
         x: &[f64],
         k: usize,
+        workspace: &mut Workspace,
         cancel: &dyn Cancel,
     ) -> Result<Experiment> {
-        let (p, coarse) = problem.sample_storm(x, options.wind, options.seed, k)?;
+        let (p, coarse) = problem.sample_storm(x, options.wind, options.seed, k, workspace)?;
         let forces = coarse.on_grid(&problem.storm);
         let dampers = problem.dampers(&p)?;
         let response = integrate_reduced(
@@ -181,9 +184,9 @@ pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Obse
     let done = AtomicUsize::new(0);
     let experiments: Vec<Experiment> = selection
         .par_iter()
-        .map(|&i| {
+        .map_init(Workspace::default, |workspace, &i| {
             check_cancel(observer)?;
-            let experiment = Experiment::run(problem, options, &design[i], i, &cancel)?;
+            let experiment = Experiment::run(problem, options, &design[i], i, workspace, &cancel)?;
             observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: k });
             Ok(experiment)
         })
@@ -243,10 +246,10 @@ pub fn fit_experiments(
     let cancel = || observer.cancelled();
     indices
         .par_iter()
-        .map(|&k| {
+        .map_init(Workspace::default, |workspace, &k| {
             check_cancel(observer)?;
             let x = plan.design.get(k).ok_or_else(|| Error::invalid("experiment", format!("no experiment {k}")))?;
-            let fit = Experiment::run(problem, options, x, k, &cancel)?.fit(k, plan, options, &cancel)?;
+            let fit = Experiment::run(problem, options, x, k, workspace, &cancel)?.fit(k, plan, options, &cancel)?;
             observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
             Ok(fit)
         })

@@ -3,7 +3,7 @@
 use super::modal::CoarseModalForces;
 use super::spectral::{CoarseSeries, SpectralGrid, simulate, simulate_coarse};
 use super::spectrum::FieldSpectrum;
-use super::{StormGrid, WindSite};
+use super::{StormGrid, WindSite, Workspace};
 use crate::error::{Error, Result};
 use crate::structure::Structure;
 use crate::uncertainty::Rng;
@@ -123,11 +123,13 @@ impl WindLoads {
         wind_speed: f64,
         shapes: MatRef<'_, f64>,
         duration: f64,
+        workspace: &mut Workspace,
         rng: &mut Rng,
     ) -> Result<CoarseModalForces> {
         Self::check_speed(wind_speed)?;
         let spectrum = self.spectrum(wind_speed);
-        let speeds = simulate_coarse(&spectrum, &self.grid(), self.site.field_generation_step_s, duration, rng)?;
+        let speeds =
+            simulate_coarse(&spectrum, &self.grid(), self.site.field_generation_step_s, duration, workspace, rng)?;
         let floor_means = self.mean_forces(wind_speed);
         let modes = shapes.ncols();
         let mut mean = vec![0.0; modes];

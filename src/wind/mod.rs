@@ -7,11 +7,14 @@ mod forces;
 mod modal;
 mod pruned;
 mod site;
+mod source;
 mod spectral;
 mod spectrum;
 
 pub use forces::{FloorForces, ModalForces, WindLoads};
 pub use modal::{CoarseModalForces, ModalWind};
+pub use pruned::Workspace;
 pub use site::{StormGrid, WindSite};
+pub use source::ForceSource;
 pub use spectral::{CoarseSeries, CrossSpectralDensity, CubicSchedule, SpectralGrid, simulate, simulate_coarse};
 pub use spectrum::{FieldSpectrum, ProjectedSpectrum};

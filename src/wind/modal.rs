@@ -10,7 +10,7 @@
 
 use super::spectral::{CoarseSeries, CrossSpectralDensity, SpectralGrid, simulate_coarse};
 use super::spectrum::ProjectedSpectrum;
-use super::{ModalForces, StormGrid, WindLoads};
+use super::{ModalForces, StormGrid, WindLoads, Workspace};
 use crate::error::Result;
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
@@ -220,8 +220,15 @@ impl ModalWind {
         ProjectedSpectrum { field, projection }
     }
 
-    /// One storm of `duration` seconds at station speed `wind_speed`, on the generation grid.
-    pub fn simulate(&self, wind_speed: f64, duration: f64, rng: &mut Rng) -> Result<CoarseModalForces> {
+    /// One storm of `duration` seconds at station speed `wind_speed`, on the generation grid, with
+    /// the transforms of `workspace`.
+    pub fn simulate(
+        &self,
+        wind_speed: f64,
+        duration: f64,
+        workspace: &mut Workspace,
+        rng: &mut Rng,
+    ) -> Result<CoarseModalForces> {
         WindLoads::check_speed(wind_speed)?;
         let shapes = self.shapes.as_ref();
         let mean_forces = self.loads.mean_forces(wind_speed);
@@ -230,17 +237,24 @@ impl ModalWind {
         let grid = self.loads.grid();
         let step = self.loads.site.field_generation_step_s;
         let fluctuations = if (TABLE_SPEEDS.0..=TABLE_SPEEDS.1).contains(&wind_speed) {
-            simulate_coarse(&ScaledSpectrum { table: &self.table, speed: wind_speed }, &grid, step, duration, rng)?
+            simulate_coarse(
+                &ScaledSpectrum { table: &self.table, speed: wind_speed },
+                &grid,
+                step,
+                duration,
+                workspace,
+                rng,
+            )?
         } else {
             let field = self.loads.spectrum(wind_speed);
-            simulate_coarse(&Self::projected(&self.loads, shapes, &field), &grid, step, duration, rng)?
+            simulate_coarse(&Self::projected(&self.loads, shapes, &field), &grid, step, duration, workspace, rng)?
         };
         Ok(CoarseModalForces { mean, fluctuations })
     }
 
     /// One storm on `storm`'s grid.
     pub fn forces(&self, wind_speed: f64, storm: &StormGrid, rng: &mut Rng) -> Result<ModalForces> {
-        Ok(self.simulate(wind_speed, storm.duration, rng)?.on_grid(storm))
+        Ok(self.simulate(wind_speed, storm.duration, &mut Workspace::default(), rng)?.on_grid(storm))
     }
 }
 
@@ -261,7 +275,8 @@ mod tests {
         let p = Problem::preset("frame40").unwrap();
         let wind = ModalWind::new(&p.wind, p.modes.shapes.as_ref());
         let (speed, seed) = (31.0, 3);
-        let coarse = wind.simulate(speed, 900.0, &mut rng_from_seed(seed)).unwrap().fluctuations;
+        let coarse =
+            wind.simulate(speed, 900.0, &mut Workspace::default(), &mut rng_from_seed(seed)).unwrap().fluctuations;
         let grid = p.wind.grid();
         let (n, lines, dw) = (3, grid.lines, grid.step());
         let phases = unit_phases(&mut rng_from_seed(seed), n * lines);

@@ -17,50 +17,53 @@
 
 use rustfft::num_complex::Complex;
 use rustfft::{Fft, FftPlanner};
-use std::cell::RefCell;
 use std::f64::consts::PI;
 use std::sync::Arc;
 
 /// One spectral line or transformed point.
 pub(super) type Bin = Complex<f32>;
 
-/// Shapes whose workspaces a thread keeps; the oldest is dropped past this, so that studies of
-/// many different discretisations, one after another, do not accumulate buffers.
+/// Shapes a [`Workspace`] keeps; the oldest is dropped past this, so that studies of many
+/// different discretisations, one after another, do not accumulate buffers.
 const KEPT_SHAPES: usize = 4;
 
-thread_local! {
-    /// Transforms (plans, twiddle factors, buffers) and sums are built once per shape and thread,
-    /// not per storm: a storm's buffers are megabytes, and allocating them afresh cost page faults.
-    static WORKSPACES: RefCell<Vec<(PrunedInverse, PolyphaseSum)>> = const { RefCell::new(Vec::new()) };
+/// The transforms (plans, twiddle factors, buffers) and sums of the shapes a caller has used,
+/// built once and reused from storm to storm (a storm's buffers are megabytes, and allocating them
+/// afresh cost page faults). A caller that draws many storms keeps one per worker thread, e.g.
+/// through rayon's `map_init`.
+#[derive(Default)]
+pub struct Workspace {
+    /// The kept shapes, oldest first.
+    kept: Vec<(PrunedInverse, PolyphaseSum)>,
 }
 
-/// Runs `f` with this thread's transform of the shape (M, lines) and a sum of `components`
-/// series of `count` points, zeroed, that its rows add to.
-pub(super) fn with_workspace<T>(
-    len: usize,
-    lines: usize,
-    components: usize,
-    count: usize,
-    f: impl FnOnce(&mut PrunedInverse, &mut PolyphaseSum) -> T,
-) -> T {
-    WORKSPACES.with(|cache| {
-        let mut cache = cache.borrow_mut();
-        let index = match cache.iter().position(|(t, _)| t.len == len && t.lines == lines) {
+impl Workspace {
+    /// Runs `f` with the transform of the shape (M, lines) and a sum of `components` series of
+    /// `count` points, zeroed, that its rows add to.
+    pub(super) fn with<T>(
+        &mut self,
+        len: usize,
+        lines: usize,
+        components: usize,
+        count: usize,
+        f: impl FnOnce(&mut PrunedInverse, &mut PolyphaseSum) -> T,
+    ) -> T {
+        let index = match self.kept.iter().position(|(t, _)| t.len == len && t.lines == lines) {
             Some(index) => index,
             None => {
                 let transform = PrunedInverse::new(len, lines);
                 let sum = PolyphaseSum::new(transform.rows);
-                if cache.len() == KEPT_SHAPES {
-                    cache.remove(0);
+                if self.kept.len() == KEPT_SHAPES {
+                    self.kept.remove(0);
                 }
-                cache.push((transform, sum));
-                cache.len() - 1
+                self.kept.push((transform, sum));
+                self.kept.len() - 1
             }
         };
-        let (transform, sum) = &mut cache[index];
+        let (transform, sum) = &mut self.kept[index];
         sum.reset(components, count);
         f(transform, sum)
-    })
+    }
 }
 
 /// The pruned inverse transform of one shape (M, lines), with its buffers.
@@ -238,7 +241,7 @@ mod tests {
         let phases: Vec<Bin> = (0..lines).map(|l| Bin::from_polar(1.0, 0.7 * l as f32 + 0.3)).collect();
         let amplitudes: Vec<f32> = (0..lines).map(|l| 1.0 / (1.0 + l as f32)).collect();
         let angle = 0.013;
-        let series = with_workspace(len, lines, 1, count, |transform, sum| {
+        let series = Workspace::default().with(len, lines, 1, count, |transform, sum| {
             assert_eq!(transform.rows, 5);
             transform.set_phases(&phases);
             sum.set_modulation(angle);

@@ -9,7 +9,7 @@
 //! modulated rows are in [`super::pruned`].
 
 use super::StormGrid;
-use super::pruned::{Bin, with_workspace};
+use super::pruned::{Bin, Workspace};
 use crate::error::{Error, Result};
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
@@ -194,15 +194,17 @@ pub fn simulate(
     storm: &StormGrid,
     rng: &mut Rng,
 ) -> Result<Vec<Vec<f64>>> {
-    Ok(simulate_coarse(csd, grid, generation_step, storm.duration, rng)?.on_grid(storm))
+    Ok(simulate_coarse(csd, grid, generation_step, storm.duration, &mut Workspace::default(), rng)?.on_grid(storm))
 }
 
-/// Simulates one realization over `duration` seconds on the generation grid only.
+/// Simulates one realization over `duration` seconds on the generation grid only, with the
+/// transforms of `workspace`.
 pub fn simulate_coarse(
     csd: &dyn CrossSpectralDensity,
     grid: &SpectralGrid,
     generation_step: f64,
     duration: f64,
+    workspace: &mut Workspace,
     rng: &mut Rng,
 ) -> Result<CoarseSeries> {
     let n = csd.dim();
@@ -229,7 +231,7 @@ pub fn simulate_coarse(
     let mut columns = vec![0.0; n * lines];
     let mut amplitudes = vec![0.0f32; lines];
     let amplitude = 2.0 * domega.sqrt();
-    let series = with_workspace(fft_len, lines, n, count, |transform, sum| {
+    let series = workspace.with(fft_len, lines, n, count, |transform, sum| {
         for m in 0..n {
             let omega0 = (m + 1) as f64 * domega / n as f64;
             // Column m of the Cholesky factor at every ω_ml: columns[j·lines + l].

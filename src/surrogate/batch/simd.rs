@@ -1,21 +1,26 @@
 //! Eight f64 lanes as one value, on three instruction sets: AVX-512 (one register), AVX2 (two)
-//! and portable arrays. The batch's dense recursion is written once over [`Vector`] and compiled
-//! for each. Arrays of `[f64; 8]` alone were not enough: the compiler scalarised the recursion's
-//! state and regrouped it into vectors that straddle two modes, paying lane permutations every step.
+//! and portable arrays. The dense recursion is written once over [`Vector`] and compiled for each.
+//! Arrays of `[f64; 8]` alone were not enough: the compiler scalarised the recursion's state and
+//! regrouped it into vectors that straddle two modes, paying lane permutations every step.
 //!
 //! Every implementation rounds identically (products that are summed are fused multiply-adds, the
 //! same operation in hardware and in `f64::mul_add`), so a lane's result does not depend on which
 //! one runs.
 //!
-//! The x86 types call instructions the processor may lack: they are only used inside functions
-//! compiled for those features and called after the features were detected (`batch::dispatch`).
+//! Soundness: a vector value can only be made from an [`Vector::Isa`] value, and the x86 ones
+//! ([`Avx512Isa`], [`Avx2Isa`]) only come from detecting their instructions on the running
+//! processor. Every method of a vector therefore runs where its instructions exist. Speed is a
+//! separate matter: the intrinsics inline only into functions compiled for the features
+//! (`dispatch`); elsewhere they become calls, correct but many times slower.
 
-use super::lanes::{LANES, Lanes};
+use super::{LANES, Lanes};
 
 /// Lane-wise arithmetic on eight f64.
-pub trait Vector: Copy {
-    fn splat(x: f64) -> Self;
-    fn load(x: &Lanes) -> Self;
+pub(super) trait Vector: Copy {
+    /// Proof that the instructions the type uses exist here; values are made only from it.
+    type Isa: Copy;
+    fn splat(isa: Self::Isa, x: f64) -> Self;
+    fn load(isa: Self::Isa, x: &Lanes) -> Self;
     fn store(self, to: &mut Lanes);
     /// self·b + c, rounded once.
     fn mul_add(self, b: Self, c: Self) -> Self;
@@ -25,13 +30,15 @@ pub trait Vector: Copy {
     fn max(self, b: Self) -> Self;
 }
 
+/// The portable arrays need no instruction beyond the baseline.
 impl Vector for Lanes {
+    type Isa = ();
     #[inline(always)]
-    fn splat(x: f64) -> Self {
+    fn splat(_: (), x: f64) -> Self {
         [x; LANES]
     }
     #[inline(always)]
-    fn load(x: &Lanes) -> Self {
+    fn load(_: (), x: &Lanes) -> Self {
         *x
     }
     #[inline(always)]
@@ -69,26 +76,48 @@ impl Vector for Lanes {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub use x86::{Avx2, Avx512};
+pub(super) use x86::{Avx2, Avx2Isa, Avx512, Avx512Isa};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::{Lanes, Vector};
     use std::arch::x86_64::*;
 
-    /// One AVX-512 register. Only for code compiled with `avx512f` running where it was detected.
+    /// Proof that the processor has AVX-512F and FMA: only [`Avx512Isa::detect`] makes one.
+    #[derive(Clone, Copy)]
+    pub struct Avx512Isa(());
+
+    impl Avx512Isa {
+        pub fn detect() -> Option<Self> {
+            (is_x86_feature_detected!("avx512f") && is_x86_feature_detected!("fma")).then_some(Avx512Isa(()))
+        }
+    }
+
+    /// Proof that the processor has AVX2 and FMA: only [`Avx2Isa::detect`] makes one.
+    #[derive(Clone, Copy)]
+    pub struct Avx2Isa(());
+
+    impl Avx2Isa {
+        pub fn detect() -> Option<Self> {
+            (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma")).then_some(Avx2Isa(()))
+        }
+    }
+
+    /// One AVX-512 register; made only with an [`Avx512Isa`].
     #[derive(Clone, Copy)]
     pub struct Avx512(__m512d);
 
-    // SAFETY (every block below): see the type's doc; the loads and stores read and write whole
-    // `[f64; 8]` through references.
+    // SAFETY (every block below): an `Avx512` exists only where an `Avx512Isa` was detected, so
+    // AVX-512F and FMA are present; the loads and stores read and write whole `[f64; 8]` through
+    // references.
     impl Vector for Avx512 {
+        type Isa = Avx512Isa;
         #[inline(always)]
-        fn splat(x: f64) -> Self {
+        fn splat(_: Avx512Isa, x: f64) -> Self {
             Avx512(unsafe { _mm512_set1_pd(x) })
         }
         #[inline(always)]
-        fn load(x: &Lanes) -> Self {
+        fn load(_: Avx512Isa, x: &Lanes) -> Self {
             Avx512(unsafe { _mm512_loadu_pd(x.as_ptr()) })
         }
         #[inline(always)]
@@ -113,18 +142,20 @@ mod x86 {
         }
     }
 
-    /// Two AVX2 registers. Only for code compiled with `avx2,fma` running where they were detected.
+    /// Two AVX2 registers; made only with an [`Avx2Isa`].
     #[derive(Clone, Copy)]
     pub struct Avx2(__m256d, __m256d);
 
-    // SAFETY (every block below): as for `Avx512`; `add(4)` stays inside the eight lanes.
+    // SAFETY (every block below): as for `Avx512`, with `Avx2Isa`; `add(4)` stays inside the eight
+    // lanes.
     impl Vector for Avx2 {
+        type Isa = Avx2Isa;
         #[inline(always)]
-        fn splat(x: f64) -> Self {
+        fn splat(_: Avx2Isa, x: f64) -> Self {
             unsafe { Avx2(_mm256_set1_pd(x), _mm256_set1_pd(x)) }
         }
         #[inline(always)]
-        fn load(x: &Lanes) -> Self {
+        fn load(_: Avx2Isa, x: &Lanes) -> Self {
             unsafe { Avx2(_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(x.as_ptr().add(4))) }
         }
         #[inline(always)]
@@ -160,16 +191,16 @@ mod x86 {
 mod tests {
     use super::*;
 
-    fn exercise<V: Vector>() -> [Lanes; 4] {
+    fn exercise<V: Vector>(isa: V::Isa) -> [Lanes; 4] {
         let a: Lanes = [1.5, -2.0, 0.1, 3.0, -0.0, 7.0, -1e-300, 2.5];
         let b: Lanes = [0.3, 0.7, -0.1, 1e16, 2.0, -3.0, 1e300, 0.4];
         let c: Lanes = [1.0, -1.0, 0.01, -1.0, 0.0, 21.0, 1.0, -1.0];
-        let (va, vb, vc) = (V::load(&a), V::load(&b), V::load(&c));
+        let (va, vb, vc) = (V::load(isa, &a), V::load(isa, &b), V::load(isa, &c));
         let mut out = [[0.0; LANES]; 4];
         va.mul_add(vb, vc).store(&mut out[0]);
         va.mul(vb).store(&mut out[1]);
         va.abs().store(&mut out[2]);
-        va.max(vb).mul_add(V::splat(2.0), V::splat(0.5)).store(&mut out[3]);
+        va.max(vb).mul_add(V::splat(isa, 2.0), V::splat(isa, 0.5)).store(&mut out[3]);
         out
     }
 
@@ -177,39 +208,25 @@ mod tests {
     /// 3·10¹⁶ − 1 keeps the 1 that a separate product would round away).
     #[test]
     fn instruction_sets_agree_bit_for_bit() {
-        let portable = exercise::<Lanes>();
+        let portable = exercise::<Lanes>(());
         assert_eq!(portable[0][3], 3.0f64.mul_add(1e16, -1.0));
+        let bits = |r: [Lanes; 4]| r.map(|r| r.map(f64::to_bits));
         #[cfg(target_arch = "x86_64")]
         {
-            if std::arch::is_x86_feature_detected!("avx512f") {
-                // SAFETY: the feature was detected.
-                let got = unsafe { avx512() };
-                assert_eq!(got.map(|r| r.map(f64::to_bits)), portable.map(|r| r.map(f64::to_bits)));
-            } else {
-                // Past the harness's capture, so that the skip is seen in the run's output.
-                use std::io::Write;
-                let _ = writeln!(std::io::stderr(), "AVX-512 comparison SKIPPED: this processor has no AVX-512F");
+            use std::io::Write;
+            // Skips are written past the harness's capture, so that they are seen in the run's output.
+            match Avx512Isa::detect() {
+                Some(isa) => assert_eq!(bits(exercise::<Avx512>(isa)), bits(portable)),
+                None => {
+                    let _ = writeln!(std::io::stderr(), "AVX-512 comparison SKIPPED: this processor has no AVX-512F");
+                }
             }
-            if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
-                // SAFETY: the features were detected.
-                let got = unsafe { avx2() };
-                assert_eq!(got.map(|r| r.map(f64::to_bits)), portable.map(|r| r.map(f64::to_bits)));
-            } else {
-                use std::io::Write;
-                let _ = writeln!(std::io::stderr(), "AVX2 comparison SKIPPED: this processor has no AVX2 with FMA");
+            match Avx2Isa::detect() {
+                Some(isa) => assert_eq!(bits(exercise::<Avx2>(isa)), bits(portable)),
+                None => {
+                    let _ = writeln!(std::io::stderr(), "AVX2 comparison SKIPPED: this processor has no AVX2 with FMA");
+                }
             }
         }
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx512f,fma")]
-    fn avx512() -> [Lanes; 4] {
-        exercise::<Avx512>()
-    }
-
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2,fma")]
-    fn avx2() -> [Lanes; 4] {
-        exercise::<Avx2>()
     }
 }

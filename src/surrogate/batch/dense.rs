@@ -1,0 +1,340 @@
+//! The free run of the paper's structures: every term the constant, Q_m(t − k) or y_s(t − k)
+//! with k ≤ [`DENSE_LAGS`], on at most [`DENSE_MODES`] modes, run as dense coefficient arrays with
+//! the modes and lags fixed at compile time, in one loop that interpolates, recurses, reduces the
+//! outputs (a [`StepSink`]) and accumulates the divergence test, with the state in registers.
+//! Written once over [`Vector`] and compiled per instruction set (`dispatch`).
+
+use super::inputs::{interpolate, splat_weights};
+use super::samples::longest_lag;
+use super::simd::Vector;
+use super::sink::{BLOCK, Divergence, Sink, first_divergence};
+use super::{LANES, Lanes, ModeProgram};
+use crate::surrogate::narx::DIVERGENCE_BOUND;
+use crate::wind::CubicSchedule;
+
+/// Most modes, and longest lag, the fast recursion is compiled for.
+const DENSE_MODES: usize = 3;
+const DENSE_LAGS: usize = 2;
+
+/// The models of a batch as dense coefficient arrays, zero where a term is absent, when every term
+/// is the constant, Q_m(t − k) or y_s(t − k) with k ≤ [`DENSE_LAGS`] — which is what the paper's
+/// structures select. With the modes and lags then fixed at compile time ([`advance`]) the last
+/// outputs are kept in local variables the compiler can hold in registers, instead of being read
+/// back from the output buffer every step.
+pub(super) struct DenseLinear {
+    /// Lag slots K = longest lag + 1 (slot 0 is the present, read only by input terms).
+    slots: usize,
+    /// Input lag slots: 1 when every input term reads Q(t) only (the usual case), else K.
+    input_slots: usize,
+    constant: Vec<Lanes>,
+    /// input[k·M + m]: coefficient of Q_m(t − k).
+    input: Vec<Lanes>,
+    /// output[(k·M + m)·M + s]: coefficient of y_s(t − k) in mode m (slot 0 stays zero).
+    output: Vec<Lanes>,
+    /// Whether no mode reads a later mode's output (output[(k·M + m)·M + s] = 0 for s > m), as
+    /// the paper's structures select: higher modes read lower ones, not the reverse. The
+    /// recursion then skips the zeros, a sixth of its operations on three modes.
+    lower: bool,
+}
+
+impl DenseLinear {
+    /// The dense arrays of `programs`, if their terms fit; `coefficient(m, k)`: term k of mode m's
+    /// coefficient in every lane.
+    pub(super) fn new(programs: &[ModeProgram], coefficient: impl Fn(usize, usize) -> Lanes) -> Option<Self> {
+        let modes = programs.len();
+        let history = longest_lag(programs);
+        if !(1..=DENSE_MODES).contains(&modes) || !(1..=DENSE_LAGS).contains(&history) {
+            return None;
+        }
+        let slots = history + 1;
+        let input_lags = programs.iter().flat_map(|p| p.terms.iter()).filter(|t| t.input_power > 0);
+        let input_slots = if input_lags.clone().all(|t| t.input_lag == 0) { 1 } else { slots };
+        let mut dense = DenseLinear {
+            slots,
+            input_slots,
+            constant: vec![[0.0; LANES]; modes],
+            input: vec![[0.0; LANES]; slots * modes],
+            output: vec![[0.0; LANES]; slots * modes * modes],
+            lower: false,
+        };
+        for (m, program) in programs.iter().enumerate() {
+            for (k, t) in program.terms.iter().enumerate() {
+                let target = match (t.output_power, t.input_power) {
+                    (0, 0) => &mut dense.constant[m],
+                    (0, 1) => &mut dense.input[t.input_lag * modes + m],
+                    (1, 0) if t.output_lag >= 1 => {
+                        &mut dense.output[(t.output_lag * modes + m) * modes + t.output_mode.unwrap_or(m)]
+                    }
+                    _ => return None,
+                };
+                let c = coefficient(m, k);
+                (0..LANES).for_each(|l| target[l] += c[l]);
+            }
+        }
+        let upper = |e: usize| e % modes > (e / modes) % modes;
+        dense.lower = dense.output.iter().enumerate().all(|(e, c)| !upper(e) || c.iter().all(|c| *c == 0.0));
+        Some(dense)
+    }
+}
+
+/// What the dense recursion does with each step's outputs, inside its own loop.
+trait StepSink<V: Vector, const M: usize> {
+    /// Step `i` of the block (counted from the block's first step) gave `y[m]`, every lane.
+    fn take(&mut self, i: usize, y: &[V; M]);
+}
+
+/// Per lane the running peak of |offset + Σ_m gain_m ŷ_m| (see [`Sink::Peaks`]).
+struct PeakTracker<V, const M: usize> {
+    gains: [V; M],
+    offsets: V,
+    peaks: V,
+}
+
+impl<V: Vector, const M: usize> StepSink<V, M> for PeakTracker<V, M> {
+    #[inline(always)]
+    fn take(&mut self, _: usize, y: &[V; M]) {
+        let mut u = self.offsets;
+        for (gain, y) in self.gains.iter().zip(y) {
+            u = gain.mul_add(*y, u);
+        }
+        // A NaN is caught by the divergence test of the block, whatever `max` makes of it.
+        self.peaks = u.abs().max(self.peaks);
+    }
+}
+
+/// The block's outputs as `outputs[i·M + m]`.
+struct Recorder<'a> {
+    outputs: &'a mut [Lanes],
+}
+
+impl<V: Vector, const M: usize> StepSink<V, M> for Recorder<'_> {
+    #[inline(always)]
+    fn take(&mut self, i: usize, y: &[V; M]) {
+        for (y, to) in y.iter().zip(&mut self.outputs[i * M..(i + 1) * M]) {
+            y.store(to);
+        }
+    }
+}
+
+/// The state the dense recursion carries from one block to the next: the last two outputs and
+/// inputs of every mode (the dense models look back at most [`DENSE_LAGS`] steps).
+#[derive(Clone, Copy)]
+struct Carry<V, const M: usize> {
+    /// ŷ(t − 1) and ŷ(t − 2) before step t.
+    last: [V; M],
+    before: [V; M],
+    /// q(t − 1) and q(t − 2) before step t.
+    last_input: [V; M],
+    before_input: [V; M],
+}
+
+/// Steps `first..first + len` (first ≥ 1) by the dense linear models, M modes, K output lag slots
+/// and KI input lag slots (LOWER: no mode reads a later one, see [`DenseLinear::lower`]), each
+/// step's inputs interpolated from the lane-major coarse inputs and its outputs handed to `sink` as step `i + sink_offset`. Returns the sum over the steps of each
+/// lane's squared outputs, which the caller tests for divergence once per block. Interpolation,
+/// recursion, reduction and check share one loop, so the outputs never go through memory; the sum
+/// of each step takes the constant, the inputs, the older outputs and the newest outputs last, so
+/// that only the last few operations wait on the previous step.
+#[inline(always)]
+#[allow(clippy::needless_range_loop, clippy::too_many_arguments)] // index loops over the fixed sizes
+fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
+    isa: V::Isa,
+    dense: &DenseLinear,
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    carry: &mut Carry<V, M>,
+    first: usize,
+    len: usize,
+    sink_offset: usize,
+    sink: &mut impl StepSink<V, M>,
+) -> Lanes {
+    let zero = V::splat(isa, 0.0);
+    let mut constant = [zero; M];
+    let mut input = [[zero; M]; KI];
+    let mut output = [[[zero; M]; M]; K];
+    let mut modes: [&[Lanes]; M] = [&[]; M];
+    for m in 0..M {
+        constant[m] = V::load(isa, &dense.constant[m]);
+        modes[m] = &coarse[m];
+        for k in 0..K {
+            if k < KI {
+                input[k][m] = V::load(isa, &dense.input[k * M + m]);
+            }
+            for s in 0..M {
+                output[k][m][s] = V::load(isa, &dense.output[(k * M + m) * M + s]);
+            }
+        }
+    }
+    let Carry { mut last, mut before, mut last_input, mut before_input } = *carry;
+    let mut squares = zero;
+    schedule.for_each(
+        first,
+        len,
+        #[inline(always)]
+        |i, p, w| {
+            let w = splat_weights::<V>(isa, w);
+            let mut q = [zero; M];
+            for m in 0..M {
+                q[m] = interpolate(isa, modes[m], p, &w);
+            }
+            let mut next = constant;
+            for m in 0..M {
+                next[m] = input[0][m].mul_add(q[m], next[m]);
+                if KI > 1 {
+                    next[m] = input[1 % KI][m].mul_add(last_input[m], next[m]);
+                }
+                if KI > 2 {
+                    next[m] = input[2 % KI][m].mul_add(before_input[m], next[m]);
+                }
+                let sources = if LOWER { m + 1 } else { M };
+                if K > 2 {
+                    for s in 0..sources {
+                        next[m] = output[2 % K][m][s].mul_add(before[s], next[m]);
+                    }
+                }
+                for s in 0..sources {
+                    next[m] = output[1][m][s].mul_add(last[s], next[m]);
+                }
+            }
+            before_input = last_input;
+            last_input = q;
+            before = last;
+            last = next;
+            for m in 0..M {
+                squares = next[m].mul_add(next[m], squares);
+            }
+            sink.take(i + sink_offset, &next);
+        },
+    );
+    *carry = Carry { last, before, last_input, before_input };
+    let mut sums = [0.0; LANES];
+    squares.store(&mut sums);
+    sums
+}
+
+/// Whether a block whose outputs have these per-lane sums of squares may have left the bound (or
+/// produced a NaN). A single output beyond the bound makes the sum exceed its square, so a block
+/// that passes is sane; one that fails is searched output by output.
+#[inline(always)]
+fn suspicious(squares: &Lanes) -> bool {
+    let mut sane = true;
+    for s in squares {
+        sane &= *s <= DIVERGENCE_BOUND * DIVERGENCE_BOUND;
+    }
+    !sane
+}
+
+/// The whole storm by the dense linear models: step 0 at rest, then blocks of [`BLOCK`] steps into
+/// `sink`. A block that fails the cheap divergence test is run again from its start into memory
+/// and searched, so the error names the first step out of bounds.
+#[inline(always)]
+fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
+    isa: V::Isa,
+    dense: &DenseLinear,
+    rests: &[Lanes],
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    steps: usize,
+    sink: &mut Sink,
+) -> Result<(), Divergence> {
+    let zero = V::splat(isa, 0.0);
+    let mut rest = [zero; M];
+    for (rest, from) in rest.iter_mut().zip(rests) {
+        *rest = V::load(isa, from);
+    }
+    let mut carry = Carry { last: rest, before: rest, last_input: [zero; M], before_input: [zero; M] };
+    schedule.for_each(0, 1, |_, p, w| {
+        for (input, coarse) in carry.last_input.iter_mut().zip(coarse) {
+            *input = interpolate(isa, coarse, p, &splat_weights(isa, w));
+        }
+    });
+    let mut block = vec![[0.0; LANES]; BLOCK * M];
+    let mut first = 0;
+    while first < steps {
+        let len = BLOCK.min(steps - first);
+        // Step 0 is the rest state; every later step is computed.
+        let from = first.max(1);
+        let (count, offset) = (first + len - from, from - first);
+        let start = carry;
+        // The block's outputs into `block`, step 0's rest first when the block starts the storm.
+        let record = |carry: &mut Carry<V, M>, block: &mut [Lanes]| {
+            let mut recorder = Recorder { outputs: block };
+            if first == 0 {
+                recorder.take(0, &rest);
+            }
+            advance::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, carry, from, count, offset, &mut recorder)
+        };
+        let squares = match sink {
+            Sink::Peaks { gains, offsets, peaks } => {
+                let mut tracker =
+                    PeakTracker { gains: [zero; M], offsets: V::load(isa, offsets), peaks: V::load(isa, peaks) };
+                for m in 0..M {
+                    tracker.gains[m] = V::splat(isa, gains[m]);
+                }
+                if first == 0 {
+                    tracker.take(0, &rest);
+                }
+                let squares = advance::<V, M, K, KI, LOWER>(
+                    isa,
+                    dense,
+                    schedule,
+                    coarse,
+                    &mut carry,
+                    from,
+                    count,
+                    offset,
+                    &mut tracker,
+                );
+                tracker.peaks.store(peaks);
+                squares
+            }
+            Sink::Blocks(_) => record(&mut carry, &mut block),
+        };
+        if suspicious(&squares) {
+            let mut replay = start;
+            record(&mut replay, &mut block);
+            if let Some(divergence) = first_divergence(&block[..len * M], M, first) {
+                return Err(divergence);
+            }
+        }
+        if let Sink::Blocks(consume) = sink {
+            consume(first, &block[..len * M]);
+        }
+        first += len;
+    }
+    Ok(())
+}
+
+/// [`run_shape`] for the batch's modes and lags: one instance per (M, K, KI, LOWER) listed, the
+/// shapes the paper's structures take (inputs at lag 0 or up to the output lags; one mode is
+/// always LOWER).
+macro_rules! dense_shapes {
+    ($isa:ident, $dense:ident, $rests:ident, $schedule:ident, $coarse:ident, $steps:ident, $sink:ident;
+     $(($m:literal, $k:literal, $ki:literal, $lower:literal)),*) => {
+        match ($dense.constant.len(), $dense.slots, $dense.input_slots, $dense.lower) {
+            $(($m, $k, $ki, $lower) => {
+                run_shape::<V, $m, $k, $ki, $lower>($isa, $dense, $rests, $schedule, $coarse, $steps, $sink)
+            })*
+            other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
+        }
+    };
+}
+
+/// The whole storm by the dense models, on the vectors of `isa`.
+#[inline(always)]
+pub(super) fn run<V: Vector>(
+    isa: V::Isa,
+    dense: &DenseLinear,
+    rests: &[Lanes],
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    steps: usize,
+    sink: &mut Sink,
+) -> Result<(), Divergence> {
+    dense_shapes!(isa, dense, rests, schedule, coarse, steps, sink;
+        (1, 2, 1, true), (1, 3, 1, true), (1, 2, 2, true), (1, 3, 3, true),
+        (2, 2, 1, true), (3, 2, 1, true), (2, 3, 1, true), (3, 3, 1, true),
+        (2, 2, 2, true), (3, 2, 2, true), (2, 3, 3, true), (3, 3, 3, true),
+        (2, 2, 1, false), (3, 2, 1, false), (2, 3, 1, false), (3, 3, 1, false),
+        (2, 2, 2, false), (3, 2, 2, false), (2, 3, 3, false), (3, 3, 3, false))
+}
