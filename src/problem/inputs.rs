@@ -1,0 +1,59 @@
+//! The uncertain inputs of a study: the paper's default input model, what each input may be, and
+//! a sample read as physical values.
+
+use crate::error::{Error, Result};
+use crate::structure::Structure;
+use crate::uncertainty::{Input, InputModel, Marginal};
+
+/// The physical values of one sample of the inputs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PhysicalParameters {
+    pub youngs_modulus: f64,
+    pub mass_factor: f64,
+    pub damping_ratio: f64,
+    pub damper_coefficients: Vec<f64>,
+    pub wind_speed: f64,
+}
+
+/// The paper's input model (section 4.3) for `structure`; damper coefficients uniform on
+/// [0, 100·damper_scale].
+pub(super) fn default_inputs(structure: &Structure, damper_scale: f64) -> InputModel {
+    let mut inputs = vec![
+        Input {
+            name: "youngs_modulus".into(),
+            marginal: Marginal::Lognormal {
+                mean: structure.reference_youngs_modulus,
+                sd: structure.reference_youngs_modulus * 15.0 / 210.0,
+            },
+        },
+        Input { name: "mass_factor".into(), marginal: Marginal::Lognormal { mean: 1.0, sd: 0.05 } },
+        Input { name: "damping_ratio".into(), marginal: Marginal::Lognormal { mean: 0.015, sd: 0.005 } },
+    ];
+    for g in 0..structure.damper_groups() {
+        inputs.push(Input {
+            name: format!("damper_c{}", g + 1),
+            marginal: Marginal::Uniform { lower: 0.0, upper: 100.0 * damper_scale },
+        });
+    }
+    inputs.push(Input { name: "wind_speed".into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } });
+    InputModel { inputs }
+}
+
+/// Every physical input is non-negative; these must also stay away from zero.
+const POSITIVE_INPUTS: [&str; 3] = ["youngs_modulus", "mass_factor", "wind_speed"];
+
+/// Refuses a marginal that reaches values the input cannot take.
+pub(super) fn check_admissible(input: &Input) -> Result<()> {
+    let (lower, _) = input.marginal.support();
+    let positive = POSITIVE_INPUTS.contains(&input.name.as_str());
+    if lower < 0.0 || (positive && input.marginal.contains(0.0)) {
+        let bound = if positive { "positive" } else { "non-negative" };
+        return Err(Error::invalid(
+            format!("inputs.{}", input.name),
+            format!(
+                "must be {bound}, but its distribution reaches {lower}; choose one that stays {bound} (lognormal, uniform)"
+            ),
+        ));
+    }
+    Ok(())
+}

@@ -1,0 +1,192 @@
+//! One study: a structure, its uncertain inputs by name, the wind site, the damper law and the storm
+//! grid (here, built from a [`ProblemSpec`] and checked), its storms and reference runs (`storms`).
+//! The paper's case study comes as two presets (`presets`), with its input model (`inputs`).
+//!
+//! The input names are the same on the command line, in files and over HTTP: `youngs_modulus` (Pa),
+//! `mass_factor`, `damping_ratio` (shared by all modes), `damper_c1` … `damper_cG` (N·(s/m)^α, one
+//! per damper group from the ground up) and `wind_speed` (m/s at the station, 10 m).
+
+mod inputs;
+mod presets;
+mod spec;
+mod storms;
+
+pub use inputs::PhysicalParameters;
+pub use presets::PRESETS;
+pub use spec::ProblemSpec;
+pub use storms::{Order, StormRun, WindPath};
+
+use crate::dynamics::Dampers;
+use crate::error::{Error, Result};
+use crate::structure::{Modes, Structure};
+use crate::uncertainty::InputModel;
+use crate::wind::{ModalWind, StormGrid, WindLoads};
+use inputs::{check_admissible, default_inputs};
+
+/// A validated study.
+#[derive(Debug, Clone)]
+pub struct Problem {
+    pub name: String,
+    /// The spec it was built from (inputs and storm as given, before later changes).
+    spec: ProblemSpec,
+    pub structure: Structure,
+    /// The retained modes at the reference stiffness and unit mass factor.
+    pub modes: Modes,
+    /// All N modes, for the classical damping of the full-order model.
+    pub all_modes: Modes,
+    pub inputs: InputModel,
+    pub wind: WindLoads,
+    /// The modal-force fast path for `modes`, its spectral table built once.
+    pub modal_wind: ModalWind,
+    pub damper_exponent: f64,
+    pub storm: StormGrid,
+}
+
+/// Most modes a study retains: the modal wind costs the square of the modes per storm and the
+/// coupled NARX dictionaries grow with them; the paper's building needs three.
+pub const MAX_MODES: usize = 10;
+
+impl Problem {
+    /// A preset study by name.
+    pub fn preset(name: &str) -> Result<Problem> {
+        Problem::from_spec(&ProblemSpec { preset: Some(name.to_string()), ..Default::default() })
+    }
+
+    pub fn from_spec(spec: &ProblemSpec) -> Result<Problem> {
+        let (name, structure, damper_scale) = presets::resolve(spec)?;
+        let mut inputs = default_inputs(&structure, damper_scale);
+        for (input, marginal) in &spec.inputs {
+            inputs = inputs.with_marginal(input, *marginal)?;
+        }
+        for input in &inputs.inputs {
+            check_admissible(input)?;
+        }
+        let modes_count = spec.modes.unwrap_or(3);
+        if modes_count > MAX_MODES {
+            return Err(Error::invalid("modes", format!("must be at most {MAX_MODES}, got {modes_count}")));
+        }
+        let modes = Modes::of(&structure, modes_count)?;
+        let all_modes = Modes::of(&structure, structure.floors())?;
+        let site = spec.wind.clone().unwrap_or_default();
+        let wind = WindLoads::new(&site, &structure)?;
+        let modal_wind = ModalWind::new(&wind, modes.shapes.as_ref());
+        let damper_exponent = spec.damper_exponent.unwrap_or(0.38);
+        if !(damper_exponent.is_finite() && damper_exponent > 0.0 && damper_exponent <= 2.0) {
+            return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {damper_exponent}")));
+        }
+        let storm = StormGrid::new(spec.duration_s.unwrap_or(900.0), spec.time_step_s.unwrap_or(0.01), &site)?;
+        // The modal forces are simulated as a process of as many components as modes, whose period
+        // 2πn/Δω is the shortest of any path: a longer storm would repeat itself.
+        let period = wind.grid().period(modes_count);
+        if storm.duration > period {
+            return Err(Error::invalid(
+                "duration_s",
+                format!(
+                    "{} s is longer than the period of the simulated wind ({period:.0} s); raise wind.frequencies",
+                    storm.duration
+                ),
+            ));
+        }
+        Ok(Problem {
+            name,
+            spec: spec.clone(),
+            structure,
+            modes,
+            all_modes,
+            inputs,
+            wind,
+            modal_wind,
+            damper_exponent,
+            storm,
+        })
+    }
+
+    /// A spec that rebuilds exactly this study: every input's marginal and the storm grid as they
+    /// are now.
+    pub fn resolved_spec(&self) -> ProblemSpec {
+        let mut spec = self.spec.clone();
+        spec.inputs = self.inputs.inputs.iter().map(|i| (i.name.clone(), i.marginal)).collect();
+        spec.duration_s = Some(self.storm.duration);
+        spec.time_step_s = Some(self.storm.time_step);
+        spec.modes = Some(self.modes.count());
+        spec
+    }
+
+    /// The same study on another storm grid.
+    pub fn with_storm(mut self, duration: f64, time_step: f64) -> Result<Problem> {
+        self.storm = StormGrid::new(duration, time_step, &self.wind.site)?;
+        Ok(self)
+    }
+
+    /// Reads a sample (values in the input model's order) as physical parameters.
+    pub fn parameters(&self, x: &[f64]) -> Result<PhysicalParameters> {
+        self.inputs.check_sample(x)?;
+        let value = |name: &str| -> Result<f64> { Ok(x[self.inputs.index_of(name)?]) };
+        let damper_coefficients =
+            (1..=self.structure.damper_groups()).map(|g| value(&format!("damper_c{g}"))).collect::<Result<Vec<_>>>()?;
+        Ok(PhysicalParameters {
+            youngs_modulus: value("youngs_modulus")?,
+            mass_factor: value("mass_factor")?,
+            damping_ratio: value("damping_ratio")?,
+            damper_coefficients,
+            wind_speed: value("wind_speed")?,
+        })
+    }
+
+    /// Stiffness factor κ = E / E_ref of a sample.
+    pub fn stiffness_factor(&self, p: &PhysicalParameters) -> f64 {
+        p.youngs_modulus / self.structure.reference_youngs_modulus
+    }
+
+    /// The retained modes of a sample: shapes fixed, ω ∝ √(κ/μ), M_m ∝ μ.
+    pub fn sample_modes(&self, p: &PhysicalParameters) -> Modes {
+        self.modes.scaled(self.stiffness_factor(p), p.mass_factor)
+    }
+
+    pub fn dampers(&self, p: &PhysicalParameters) -> Result<Dampers> {
+        Dampers::new(&self.structure, &p.damper_coefficients, self.damper_exponent)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::uncertainty::Marginal;
+
+    #[test]
+    fn presets_have_the_papers_eight_inputs() {
+        let p = Problem::preset("frame40-kn").unwrap();
+        let names: Vec<&str> = p.inputs.names().collect();
+        assert_eq!(
+            names,
+            [
+                "youngs_modulus",
+                "mass_factor",
+                "damping_ratio",
+                "damper_c1",
+                "damper_c2",
+                "damper_c3",
+                "damper_c4",
+                "wind_speed"
+            ]
+        );
+        assert_eq!(p.inputs.marginal("damper_c3").unwrap(), &Marginal::Uniform { lower: 0.0, upper: 1.0e5 });
+        let q = Problem::preset("frame40").unwrap();
+        assert_eq!(q.inputs.marginal("damper_c3").unwrap(), &Marginal::Uniform { lower: 0.0, upper: 100.0 });
+    }
+
+    #[test]
+    fn bad_specs_are_refused_by_name() {
+        assert!(Problem::preset("frame41").unwrap_err().to_string().contains("unknown preset `frame41`"));
+        let mut spec = ProblemSpec { preset: Some("frame40".into()), ..Default::default() };
+        spec.inputs.insert("youngs_modulus".into(), Marginal::Normal { mean: 210e9, sd: 15e9 });
+        assert!(Problem::from_spec(&spec).unwrap_err().to_string().starts_with("inputs.youngs_modulus"));
+        let mut spec = ProblemSpec { preset: Some("frame40".into()), ..Default::default() };
+        spec.inputs.insert("stiffness".into(), Marginal::Constant { value: 1.0 });
+        assert!(Problem::from_spec(&spec).unwrap_err().to_string().contains("unknown input"));
+        let spec = ProblemSpec { preset: Some("frame40".into()), duration_s: Some(-5.0), ..Default::default() };
+        assert!(Problem::from_spec(&spec).unwrap_err().to_string().starts_with("duration_s"));
+        let spec = ProblemSpec { preset: Some("frame40".into()), modes: Some(0), ..Default::default() };
+        assert!(Problem::from_spec(&spec).unwrap_err().to_string().starts_with("modes"));
+    }
+}

@@ -1,0 +1,134 @@
+//! A study's storms and its reference runs: modal forces drawn for a sample (by the modal fast
+//! path or the floor field), and one storm through the reduced- or full-order reference model.
+
+use super::{PhysicalParameters, Problem};
+use crate::cancel::Never;
+use crate::dynamics::{FullSystem, integrate_full, integrate_reduced};
+use crate::error::Result;
+use crate::uncertainty::{Rng, rng_from_seed, stream_seed};
+use crate::wind::{CoarseModalForces, ModalForces, Workspace};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// How the wind of a reference run is generated.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum WindPath {
+    /// Every floor's speed, then Q = Φᵀ f.
+    Field,
+    /// The retained modes' forces directly from Φᵀ S_f Φ (equal in law, much cheaper).
+    Modal,
+}
+
+/// Which reference model integrates the storm.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum Order {
+    Reduced,
+    Full,
+}
+
+/// One storm through the reference model.
+#[derive(Debug, Clone)]
+pub struct StormRun {
+    /// Roof displacement history (m), static part included.
+    pub roof: Vec<f64>,
+    /// Modal forces that drove it (absent for full-order runs from the field).
+    pub modal_forces: Option<ModalForces>,
+    /// Modal displacement histories of a reduced-order run.
+    pub modal_displacements: Option<Vec<Vec<f64>>>,
+    pub wind_seconds: f64,
+    pub integration_seconds: f64,
+}
+
+impl StormRun {
+    /// Peak absolute roof displacement (m).
+    pub fn peak(&self) -> f64 {
+        self.roof.iter().fold(0.0, |m, x| m.max(x.abs()))
+    }
+}
+
+impl Problem {
+    /// A storm's modal forces on the wind's generation grid, by the fast path or the full field,
+    /// with the transforms of `workspace`.
+    pub fn coarse_forces(
+        &self,
+        p: &PhysicalParameters,
+        path: WindPath,
+        workspace: &mut Workspace,
+        rng: &mut Rng,
+    ) -> Result<CoarseModalForces> {
+        match path {
+            WindPath::Modal => self.modal_wind.simulate(p.wind_speed, self.storm.duration, workspace, rng),
+            WindPath::Field => {
+                self.wind.projected_field(p.wind_speed, self.modes.shapes.as_ref(), self.storm.duration, workspace, rng)
+            }
+        }
+    }
+
+    /// A storm's modal forces on the storm's grid.
+    pub fn modal_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<ModalForces> {
+        Ok(self.coarse_forces(p, path, &mut Workspace::default(), rng)?.on_grid(&self.storm))
+    }
+
+    /// Sample k of a run seeded with `seed`: its physical parameters and its storm's modal forces on
+    /// the generation grid. The storm depends only on (seed, k), whichever thread draws it and
+    /// however many there are. `workspace` holds the wind's transforms; keep one per thread.
+    pub fn sample_storm(
+        &self,
+        x: &[f64],
+        path: WindPath,
+        seed: u64,
+        k: usize,
+        workspace: &mut Workspace,
+    ) -> Result<(PhysicalParameters, CoarseModalForces)> {
+        let p = self.parameters(x)?;
+        let forces = self.coarse_forces(&p, path, workspace, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
+        Ok((p, forces))
+    }
+
+    /// One storm through the reference model (not cancellable: for the command line). Full-order
+    /// runs always use the floor field.
+    pub fn reference_run(&self, x: &[f64], order: Order, path: WindPath, rng: &mut Rng) -> Result<StormRun> {
+        let p = self.parameters(x)?;
+        let dampers = self.dampers(&p)?;
+        let dt = self.storm.time_step;
+        match order {
+            Order::Reduced => {
+                let started = Instant::now();
+                let forces = self.modal_forces(&p, path, rng)?;
+                let wind_seconds = started.elapsed().as_secs_f64();
+                let started = Instant::now();
+                let response =
+                    integrate_reduced(&self.sample_modes(&p), p.damping_ratio, &dampers, &forces, dt, &Never)?;
+                let integration_seconds = started.elapsed().as_secs_f64();
+                Ok(StormRun {
+                    roof: response.roof(),
+                    modal_forces: Some(forces),
+                    modal_displacements: Some(response.displacements),
+                    wind_seconds,
+                    integration_seconds,
+                })
+            }
+            Order::Full => {
+                let started = Instant::now();
+                let forces = self.wind.floor_forces(p.wind_speed, &self.storm, rng)?;
+                let wind_seconds = started.elapsed().as_secs_f64();
+                let started = Instant::now();
+                let system = FullSystem::new(
+                    &self.structure,
+                    &self.all_modes,
+                    self.stiffness_factor(&p),
+                    p.mass_factor,
+                    p.damping_ratio,
+                );
+                let response = integrate_full(&system, &dampers, &forces, dt, &Never)?;
+                let integration_seconds = started.elapsed().as_secs_f64();
+                let roof = response.displacements.last().cloned().unwrap_or_default();
+                Ok(StormRun { roof, modal_forces: None, modal_displacements: None, wind_seconds, integration_seconds })
+            }
+        }
+    }
+}
