@@ -3,10 +3,13 @@
 //! Bad input names the field at fault so that the command line can print it and the service can put
 //! it in a problem+json `errors[]` entry without parsing strings.
 
+use serde::{Deserialize, Serialize};
 use std::fmt;
 
-/// What went wrong in the numerical core.
-#[derive(Debug, Clone, PartialEq)]
+/// What went wrong in the numerical core. Serialisable so that an error met on one replica's
+/// worker reaches the job it belongs to with its kind intact.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Error {
     /// The caller supplied something unusable; `field` names it (`stiffness`, `inputs.wind_speed`, ...).
     Invalid { field: String, reason: String },
@@ -15,7 +18,7 @@ pub enum Error {
     /// The caller asked the work to stop.
     Cancelled,
     /// Something outside the request failed: the database, the runtime, a thread that panicked.
-    /// Neither bad input nor numerics, so the command line gives it its own exit code (1).
+    /// Neither bad input nor numerics, so the command line gives it its own exit code (3).
     Internal(String),
 }
 

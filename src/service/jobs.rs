@@ -28,16 +28,17 @@ use std::time::{Duration, Instant};
 /// small against its work, small enough that a full-size calibration has tasks for every replica.
 const EXPERIMENTS_PER_TASK: usize = 10;
 
-/// What the blocking work shares with its async supervisor.
+/// What the blocking work and its async supervisor share: the work reports progress here and
+/// reads whether to stop.
 #[derive(Default)]
-struct Shared {
+struct Supervision {
     /// Latest progress, saved at the next heartbeat.
     progress: Mutex<Option<Progress>>,
     /// Set by the supervisor on a cancel request or shutdown; read by the work between steps.
     cancel: AtomicBool,
 }
 
-impl Observer for Shared {
+impl Observer for Supervision {
     fn progress(&self, progress: Progress) {
         *self.progress.lock().expect("progress lock") = Some(progress);
     }
@@ -99,11 +100,11 @@ struct TaskRequest {
 
 /// Runs a task with its own lease; `parent` is the coordinating job's cancel flag when the
 /// coordinator runs it itself.
-async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&Shared>) {
+async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&Supervision>) {
     let store = &state.store;
     let (job_id, chunk) = (task.job_id.clone(), task.chunk);
-    let shared = Arc::new(Shared::default());
-    let observer = shared.clone();
+    let supervision = Arc::new(Supervision::default());
+    let observer = supervision.clone();
     let config = state.config.clone();
     let mut work = tokio::task::spawn_blocking(move || -> Result<Vec<ExperimentFit>> {
         let request: TaskRequest =
@@ -130,7 +131,7 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
                     }
                 }
                 if stop {
-                    shared.cancel.store(true, Ordering::Relaxed);
+                    supervision.cancel.store(true, Ordering::Relaxed);
                 }
             }
         }
@@ -138,8 +139,8 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
     let (finished, text) = match result {
         Ok(Ok(fits)) => (Some("done"), serde_json::to_string(&fits).expect("fits serialise")),
         Ok(Err(Error::Cancelled)) => (None, String::new()),
-        Ok(Err(error)) => (Some("failed"), error.to_string()),
-        Err(panic) => (Some("failed"), format!("the task panicked: {panic}")),
+        Ok(Err(error)) => (Some("failed"), task_failure(&error)),
+        Err(panic) => (Some("failed"), task_failure(&Error::Internal(format!("the task panicked: {panic}")))),
     };
     let recorded = match finished {
         Some(outcome) => lease
@@ -153,14 +154,20 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
     }
 }
 
+/// A failed task's error as its row keeps it: JSON, so that the coordinating job fails with the
+/// same kind of error (bad input, numerics, internal) wherever the task ran.
+fn task_failure(error: &Error) -> String {
+    serde_json::to_string(error).expect("errors serialise")
+}
+
 /// What a job produced.
-enum Output {
+enum JobOutput {
     Metamodel(Box<Metamodel>),
     Report(Box<ValidationReport>),
     Curve(Box<ExceedanceAnswer>),
 }
 
-type WorkFuture = Pin<Box<dyn Future<Output = Result<(Output, String)>> + Send>>;
+type WorkFuture = Pin<Box<dyn Future<Output = Result<(JobOutput, String)>> + Send>>;
 
 /// A blocking computation as a future; a panic becomes an error.
 async fn blocking<T: Send + 'static>(work: impl FnOnce() -> Result<T> + Send + 'static) -> Result<T> {
@@ -193,30 +200,31 @@ async fn prepare(
     owner: &str,
     kind: &str,
     request: &str,
-    shared: Arc<Shared>,
+    supervision: Arc<Supervision>,
 ) -> Result<WorkFuture> {
     match kind {
         "calibration" => {
             let request: CalibrationRequest = parse(request)?;
             let (checked, config) = (request.clone(), state.config.clone());
             let (problem, options) = blocking(move || checked.resolve(&config)).await?;
-            let work = coordinate(state.clone(), id.to_string(), owner.to_string(), request, problem, options, shared);
+            let work =
+                coordinate(state.clone(), id.to_string(), owner.to_string(), request, problem, options, supervision);
             Ok(Box::pin(work))
         }
         "validation" => {
             let job: ValidationJob = parse(request)?;
             let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
-                let report = validate(&metamodel, &problem, job.samples, job.seed, shared.as_ref())?;
-                Ok((Output::Report(Box::new(report)), problem.name))
+                let report = validate(&metamodel, &problem, job.samples, job.seed, supervision.as_ref())?;
+                Ok((JobOutput::Report(Box::new(report)), problem.name))
             })))
         }
         "exceedance" => {
             let job: ExceedanceJob = parse(request)?;
             let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
-                let answer = job.request.answer(&metamodel, &problem, &job.metamodel_id, shared.as_ref())?;
-                Ok((Output::Curve(Box::new(answer)), problem.name))
+                let answer = job.request.answer(&metamodel, &problem, &job.metamodel_id, supervision.as_ref())?;
+                Ok((JobOutput::Curve(Box::new(answer)), problem.name))
             })))
         }
         other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
@@ -226,14 +234,14 @@ async fn prepare(
 /// A database call of a running job, tried again every second through transient faults until it
 /// answers or the job is cancelled: the job's heartbeat cancels it when the lease is lost.
 async fn through_faults<T, F: Future<Output = std::result::Result<T, sqlx::Error>>>(
-    shared: &Shared,
+    supervision: &Supervision,
     what: &str,
     mut call: impl FnMut() -> F,
 ) -> Result<T> {
     loop {
         match call().await {
             Ok(value) => return Ok(value),
-            Err(_) if shared.cancelled() => return Err(Error::Cancelled),
+            Err(_) if supervision.cancelled() => return Err(Error::Cancelled),
             Err(error) => {
                 tracing::warn!(%error, what, "a database call failed; trying again");
                 tokio::time::sleep(Duration::from_secs(1)).await;
@@ -250,13 +258,13 @@ async fn coordinate(
     request: CalibrationRequest,
     problem: Problem,
     options: CalibrationOptions,
-    shared: Arc<Shared>,
-) -> Result<(Output, String)> {
+    supervision: Arc<Supervision>,
+) -> Result<(JobOutput, String)> {
     let problem = Arc::new(problem);
     let options = Arc::new(options);
     let planned = {
-        let (problem, options, shared) = (problem.clone(), options.clone(), shared.clone());
-        Arc::new(blocking(move || plan(&problem, &options, shared.as_ref())).await?)
+        let (problem, options, supervision) = (problem.clone(), options.clone(), supervision.clone());
+        Arc::new(blocking(move || plan(&problem, &options, supervision.as_ref())).await?)
     };
     let started = Instant::now();
     let remaining = planned.plan.remaining();
@@ -272,34 +280,35 @@ async fn coordinate(
         })
         .collect();
     let store = &state.store;
-    through_faults(&shared, "queueing tasks", || store.insert_tasks(&id, &tasks)).await?;
+    through_faults(&supervision, "queueing tasks", || store.insert_tasks(&id, &tasks)).await?;
     state.wake.notify_waiters();
     let mut fits = {
-        let (planned, options, shared) = (planned.clone(), options.clone(), shared.clone());
-        blocking(move || planned.fit_selection(&options, shared.as_ref())).await?
+        let (planned, options, supervision) = (planned.clone(), options.clone(), supervision.clone());
+        blocking(move || planned.fit_selection(&options, supervision.as_ref())).await?
     };
     let total = planned.plan.design.len();
     loop {
-        if shared.cancelled() {
+        if supervision.cancelled() {
             return Err(Error::Cancelled);
         }
-        let tally = through_faults(&shared, "counting tasks", || store.task_tally(&id)).await?;
-        if let Some(reason) = tally.failure {
-            return Err(Error::Numerical(reason));
+        let tally = through_faults(&supervision, "counting tasks", || store.task_tally(&id)).await?;
+        if let Some(failure) = tally.failure {
+            return Err(serde_json::from_str(&failure).unwrap_or(Error::Internal(failure)));
         }
         let done = fits.len() + (tally.done as usize * EXPERIMENTS_PER_TASK).min(remaining.len());
-        shared.progress(Progress::Experiments { done, total });
+        supervision.progress(Progress::Experiments { done, total });
         if tally.done == tally.total {
             break;
         }
-        let claimed =
-            through_faults(&shared, "claiming a task", || store.claim_task(&owner, state.config.lease_ms, Some(&id)));
+        let claimed = through_faults(&supervision, "claiming a task", || {
+            store.claim_task(&owner, state.config.lease_ms, Some(&id))
+        });
         match claimed.await? {
-            Some(task) => run_task(&state, &owner, task, Some(&shared)).await,
+            Some(task) => run_task(&state, &owner, task, Some(&supervision)).await,
             None => tokio::time::sleep(Duration::from_millis(250)).await,
         }
     }
-    for text in through_faults(&shared, "reading task results", || store.task_results(&id)).await? {
+    for text in through_faults(&supervision, "reading task results", || store.task_results(&id)).await? {
         let chunk: Vec<ExperimentFit> =
             serde_json::from_str(&text).map_err(|e| Error::Internal(format!("a stored task result: {e}")))?;
         fits.extend(chunk);
@@ -307,14 +316,14 @@ async fn coordinate(
     let seconds = StageSeconds { coefficients: started.elapsed().as_secs_f64(), ..planned.seconds.clone() };
     let name = problem.name.clone();
     let metamodel = blocking(move || assemble(&problem, &options, &planned, fits, seconds, &Silent)).await?;
-    Ok((Output::Metamodel(Box::new(metamodel)), name))
+    Ok((JobOutput::Metamodel(Box::new(metamodel)), name))
 }
 
 async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: String) {
     let store: &Store = &state.store;
-    let shared = Arc::new(Shared::default());
+    let supervision = Arc::new(Supervision::default());
     let mut lease = LeaseKeeper::claimed(state.config.lease_ms);
-    let mut work = match prepare(state, &id, owner, kind, &request, shared.clone()).await {
+    let mut work = match prepare(state, &id, owner, kind, &request, supervision.clone()).await {
         Ok(work) => work,
         Err(error) => {
             let reason = error.to_string();
@@ -329,41 +338,41 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
             result = &mut work => break result,
             _ = ticker.tick() => {
                 if lease.due() {
-                    let progress = shared.progress.lock().expect("progress lock").clone();
+                    let progress = supervision.progress.lock().expect("progress lock").clone();
                     let text = progress.map(|p| serde_json::to_string(&p).expect("progress serialises"));
                     match store.heartbeat(&id, owner, state.config.lease_ms, text.as_deref()).await {
                         Ok(Some(cancel)) => {
                             lease.renewed();
                             if cancel {
-                                shared.cancel.store(true, Ordering::Relaxed);
+                                supervision.cancel.store(true, Ordering::Relaxed);
                             }
                         }
-                        Ok(None) => shared.cancel.store(true, Ordering::Relaxed), // lease lost: stop, discard
+                        Ok(None) => supervision.cancel.store(true, Ordering::Relaxed), // lease lost: stop, discard
                         Err(error) => {
                             tracing::warn!(%error, job = %id, "renewing a job's lease failed");
                             if !lease.failed() {
-                                shared.cancel.store(true, Ordering::Relaxed);
+                                supervision.cancel.store(true, Ordering::Relaxed);
                             }
                         }
                     }
                 }
                 if state.draining.load(Ordering::Relaxed) {
-                    shared.cancel.store(true, Ordering::Relaxed);
+                    supervision.cancel.store(true, Ordering::Relaxed);
                 }
             }
         }
     };
     let outcome = match result {
-        Ok((Output::Metamodel(metamodel), preset)) => {
+        Ok((JobOutput::Metamodel(metamodel), preset)) => {
             let metamodel_id = uuid::Uuid::new_v4().to_string();
             let body = serde_json::to_string(&metamodel).expect("a metamodel serialises");
             lease.persist("a metamodel", || store.complete(&id, owner, &metamodel_id, &preset, &body)).await.map(|_| ())
         }
-        Ok((Output::Report(report), _)) => {
+        Ok((JobOutput::Report(report), _)) => {
             let body = serde_json::to_string(&report).expect("a report serialises");
             lease.persist("a report", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
         }
-        Ok((Output::Curve(curve), _)) => {
+        Ok((JobOutput::Curve(curve), _)) => {
             let body = serde_json::to_string(&curve).expect("a curve serialises");
             lease.persist("a curve", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
         }

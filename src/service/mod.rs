@@ -38,6 +38,7 @@ use tokio::sync::{Notify, Semaphore};
 pub struct AppState {
     /// Jobs, tasks, idempotency keys and metamodels; shared by every replica on one database.
     store: Store,
+    /// The settings the server started with: limits, budgets, lease timing.
     config: Arc<ServeArgs>,
     /// The API keys as digests (none: the API is open).
     keys: Arc<ApiKeys>,
