@@ -143,13 +143,7 @@ fn full_order_model_converges_as_the_time_step_shrinks() {
     let (p, x) = stiff_damper_problem(60.0, finest);
     let params = p.parameters(&x).unwrap();
     let forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(8)).unwrap();
-    let system = FullSystem::new(
-        &p.structure,
-        &p.all_modes,
-        p.stiffness_factor(&params),
-        params.mass_factor,
-        params.damping_ratio,
-    );
+    let system = p.full_system(&params);
     let dampers = p.dampers(&params).unwrap();
     let roofs: Vec<Vec<f64>> = [8, 4, 2, 1]
         .iter()
@@ -179,13 +173,7 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
         integrate_reduced(&p.sample_modes(&params), params.damping_ratio, &dampers, &modal_forces, 0.01, &Never)
             .unwrap()
             .roof();
-    let system = FullSystem::new(
-        &p.structure,
-        &p.all_modes,
-        p.stiffness_factor(&params),
-        params.mass_factor,
-        params.damping_ratio,
-    );
+    let system = p.full_system(&params);
     let full = integrate_full(&system, &dampers, &floor_forces, 0.01, &Never).unwrap().displacements.pop().unwrap();
     let peak = |u: &[f64]| u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mean = |u: &[f64]| u.iter().sum::<f64>() / u.len() as f64;

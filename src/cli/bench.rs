@@ -5,7 +5,7 @@
 
 use crate::analysis::{Response, automatic_thresholds, exceedance_curve, metamodel_peaks};
 use crate::cancel::Never;
-use crate::dynamics::{FullSystem, integrate_full, integrate_reduced};
+use crate::dynamics::{integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::{BatchWorkspace, CalibrationOptions, LANES, Metamodel, Silent, calibrate};
@@ -139,13 +139,7 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
         p.modal_wind.simulate(params.wind_speed, p.storm.duration, &mut wind_workspace, &mut rng_from_seed(1))?;
     let modal_forces = coarse.on_grid(&p.storm);
     let modes = p.sample_modes(&params);
-    let system = FullSystem::new(
-        &p.structure,
-        &p.all_modes,
-        p.stiffness_factor(&params),
-        params.mass_factor,
-        params.damping_ratio,
-    );
+    let system = p.full_system(&params);
     let weights = Response::Displacement { floor: p.structure.floors() }.weights(&metamodel.modes.shapes);
     let batch: Vec<(usize, &[f64], &dyn ForceSource)> =
         (0..LANES).map(|k| (k, &x[..], &coarse as &dyn ForceSource)).collect();

@@ -16,7 +16,7 @@ pub use presets::PRESETS;
 pub use spec::ProblemSpec;
 pub use storms::{Order, StormRun, WindPath};
 
-use crate::dynamics::Dampers;
+use crate::dynamics::{Dampers, FullSystem};
 use crate::error::{Error, Result};
 use crate::structure::{Modes, Structure};
 use crate::uncertainty::InputModel;
@@ -136,6 +136,11 @@ impl Problem {
     /// Stiffness factor κ = E / E_ref of a sample.
     pub fn stiffness_factor(&self, p: &PhysicalParameters) -> f64 {
         p.youngs_modulus / self.structure.reference_youngs_modulus
+    }
+
+    /// The full-order system of a sample: every mode, its stiffness, mass and damping ratio.
+    pub fn full_system(&self, p: &PhysicalParameters) -> FullSystem {
+        FullSystem::new(&self.structure, &self.all_modes, self.stiffness_factor(p), p.mass_factor, p.damping_ratio)
     }
 
     /// The retained modes of a sample: shapes fixed, ω ∝ √(κ/μ), M_m ∝ μ.

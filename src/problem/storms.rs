@@ -3,7 +3,7 @@
 
 use super::{PhysicalParameters, Problem};
 use crate::cancel::Never;
-use crate::dynamics::{FullSystem, integrate_full, integrate_reduced};
+use crate::dynamics::{integrate_full, integrate_reduced};
 use crate::error::Result;
 use crate::uncertainty::{Rng, rng_from_seed, stream_seed};
 use crate::wind::{CoarseModalForces, ModalForces, Workspace};
@@ -117,13 +117,7 @@ impl Problem {
                 let forces = self.wind.floor_forces(p.wind_speed, &self.storm, rng)?;
                 let wind_seconds = started.elapsed().as_secs_f64();
                 let started = Instant::now();
-                let system = FullSystem::new(
-                    &self.structure,
-                    &self.all_modes,
-                    self.stiffness_factor(&p),
-                    p.mass_factor,
-                    p.damping_ratio,
-                );
+                let system = self.full_system(&p);
                 let response = integrate_full(&system, &dampers, &forces, dt, &Never)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
                 let roof = response.displacements.last().cloned().unwrap_or_default();

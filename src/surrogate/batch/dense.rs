@@ -4,7 +4,7 @@
 //! outputs (a [`StepSink`]) and accumulates the divergence test, with the state in registers.
 //! Written once over [`Vector`] and compiled per instruction set (`dispatch`).
 
-use super::inputs::{interpolate, splat_weights};
+use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
 use super::simd::Vector;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
@@ -231,12 +231,10 @@ fn suspicious(squares: &Lanes) -> bool {
 fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
     isa: V::Isa,
     dense: &DenseLinear,
-    rests: &[Lanes],
-    schedule: &CubicSchedule,
-    coarse: &[Vec<Lanes>],
-    steps: usize,
+    prepared: &Prepared,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
+    let &Prepared { rests, ref schedule, coarse, steps } = prepared;
     let zero = V::splat(isa, 0.0);
     let mut rest = [zero; M];
     for (rest, from) in rest.iter_mut().zip(rests) {
@@ -309,11 +307,11 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
 /// shapes the paper's structures take (inputs at lag 0 or up to the output lags; one mode is
 /// always LOWER).
 macro_rules! dense_shapes {
-    ($isa:ident, $dense:ident, $rests:ident, $schedule:ident, $coarse:ident, $steps:ident, $sink:ident;
+    ($isa:ident, $dense:ident, $prepared:ident, $sink:ident;
      $(($m:literal, $k:literal, $ki:literal, $lower:literal)),*) => {
         match ($dense.constant.len(), $dense.slots, $dense.input_slots, $dense.lower) {
             $(($m, $k, $ki, $lower) => {
-                run_shape::<V, $m, $k, $ki, $lower>($isa, $dense, $rests, $schedule, $coarse, $steps, $sink)
+                run_shape::<V, $m, $k, $ki, $lower>($isa, $dense, $prepared, $sink)
             })*
             other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
         }
@@ -325,13 +323,10 @@ macro_rules! dense_shapes {
 pub(super) fn run<V: Vector>(
     isa: V::Isa,
     dense: &DenseLinear,
-    rests: &[Lanes],
-    schedule: &CubicSchedule,
-    coarse: &[Vec<Lanes>],
-    steps: usize,
+    prepared: &Prepared,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
-    dense_shapes!(isa, dense, rests, schedule, coarse, steps, sink;
+    dense_shapes!(isa, dense, prepared, sink;
         (1, 2, 1, true), (1, 3, 1, true), (1, 2, 2, true), (1, 3, 3, true),
         (2, 2, 1, true), (3, 2, 1, true), (2, 3, 1, true), (3, 3, 1, true),
         (2, 2, 2, true), (3, 2, 2, true), (2, 3, 3, true), (3, 3, 3, true),

@@ -3,20 +3,23 @@
 
 use super::dense::{self, DenseLinear};
 use super::general::{self, TermLists};
-use super::inputs::{Workspace, lane_inputs};
+use super::inputs::{Prepared, Workspace, lane_inputs};
 use super::simd::Vector;
 #[cfg(target_arch = "x86_64")]
 use super::simd::{Avx2, Avx2Isa, Avx512, Avx512Isa};
 use super::sink::{Divergence, Sink};
 use super::{BatchSample, Lanes};
 
-/// A batch's models compiled for the free run.
+/// A batch's models compiled for the free run, and the storm they run over.
 pub(super) struct Compiled {
     /// Each mode's rest state, every lane: its outputs before t = 0.
     pub rests: Vec<Lanes>,
     /// 1 / input scale per mode.
     pub inverse_scales: Vec<f64>,
     pub recursion: Recursion,
+    /// The storm's steps, and their length in seconds.
+    pub steps: usize,
+    pub time_step: f64,
 }
 
 /// How the steps are computed.
@@ -31,8 +34,6 @@ pub(super) enum Recursion {
 pub(super) fn free_run(
     compiled: &Compiled,
     samples: &[BatchSample],
-    steps: usize,
-    time_step: f64,
     workspace: &mut Workspace,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
@@ -41,14 +42,14 @@ pub(super) fn free_run(
         if let Some(isa) = Avx512Isa::detect() {
             // SAFETY: `isa` was detected, so the processor has the features the function is
             // compiled for.
-            return unsafe { free_run_avx512(isa, compiled, samples, steps, time_step, workspace, sink) };
+            return unsafe { free_run_avx512(isa, compiled, samples, workspace, sink) };
         }
         if let Some(isa) = Avx2Isa::detect() {
             // SAFETY: as above.
-            return unsafe { free_run_avx2(isa, compiled, samples, steps, time_step, workspace, sink) };
+            return unsafe { free_run_avx2(isa, compiled, samples, workspace, sink) };
         }
     }
-    free_run_on::<Lanes>((), compiled, samples, steps, time_step, workspace, sink)
+    free_run_on::<Lanes>((), compiled, samples, workspace, sink)
 }
 
 /// [`free_run_on`] compiled for the features of a vector type, so that its intrinsics inline.
@@ -62,12 +63,10 @@ macro_rules! compiled_for {
             isa: <$vector as Vector>::Isa,
             compiled: &Compiled,
             samples: &[BatchSample],
-            steps: usize,
-            time_step: f64,
             workspace: &mut Workspace,
             sink: &mut Sink,
         ) -> Result<(), Divergence> {
-            free_run_on::<$vector>(isa, compiled, samples, steps, time_step, workspace, sink)
+            free_run_on::<$vector>(isa, compiled, samples, workspace, sink)
         }
     };
 }
@@ -84,15 +83,14 @@ fn free_run_on<V: Vector>(
     isa: V::Isa,
     compiled: &Compiled,
     samples: &[BatchSample],
-    steps: usize,
-    time_step: f64,
     workspace: &mut Workspace,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
+    let (steps, time_step) = (compiled.steps, compiled.time_step);
     let schedule = lane_inputs(samples, &compiled.inverse_scales, steps, time_step, workspace);
-    let coarse = &workspace.inputs;
+    let prepared = Prepared { rests: &compiled.rests, schedule, coarse: &workspace.inputs, steps };
     match &compiled.recursion {
-        Recursion::Dense(models) => dense::run::<V>(isa, models, &compiled.rests, &schedule, coarse, steps, sink),
-        Recursion::TermLists(lists) => general::run(lists, &compiled.rests, &schedule, coarse, steps, sink),
+        Recursion::Dense(models) => dense::run::<V>(isa, models, &prepared, sink),
+        Recursion::TermLists(lists) => general::run(lists, &prepared, sink),
     }
 }

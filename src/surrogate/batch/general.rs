@@ -3,11 +3,10 @@
 //! recursion (`dense`) covers the paper's structures faster; this path covers the rest (powers,
 //! products of inputs and outputs, long lags).
 
-use super::inputs::{interpolate, splat_weights};
+use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use super::{LANES, Lanes, ModeProgram};
-use crate::wind::CubicSchedule;
 
 /// A term with its sources resolved and its coefficient in every lane.
 #[derive(Debug, Clone, Copy)]
@@ -70,14 +69,8 @@ impl TermLists {
 /// then the block, the modes interleaved: outputs[(h + i)·modes + m]. Before t = 0 the outputs are
 /// at rest and the input deviations zero.
 #[inline(always)]
-pub(super) fn run(
-    lists: &TermLists,
-    rests: &[Lanes],
-    schedule: &CubicSchedule,
-    coarse: &[Vec<Lanes>],
-    steps: usize,
-    sink: &mut Sink,
-) -> Result<(), Divergence> {
+pub(super) fn run(lists: &TermLists, prepared: &Prepared, sink: &mut Sink) -> Result<(), Divergence> {
+    let &Prepared { rests, ref schedule, coarse, steps } = prepared;
     let modes = rests.len();
     let h = lists.history;
     let mut inputs: Vec<Lanes> = vec![[0.0; LANES]; (h + BLOCK) * modes];

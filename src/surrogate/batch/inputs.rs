@@ -15,6 +15,18 @@ pub struct Workspace {
     pub(super) inputs: Vec<Vec<Lanes>>,
 }
 
+/// What a recursion runs on: each mode's rest state, the lane-major inputs and the schedule onto
+/// them, and the storm's length.
+pub(super) struct Prepared<'a> {
+    /// rests[m][lane]: mode m's output before t = 0.
+    pub rests: &'a [Lanes],
+    /// The schedule from the storm's steps onto the points of `coarse`.
+    pub schedule: CubicSchedule,
+    /// coarse[m][q][lane], as in [`Workspace`].
+    pub coarse: &'a [Vec<Lanes>],
+    pub steps: usize,
+}
+
 /// The scaled input deviations of every lane into `workspace`: inputs[m][q][lane] the value at
 /// coarse point q (at t = (q − 1)·dt_g); returns the schedule from the storm's grid onto the coarse
 /// points. Samples from one generation grid are taken as they are; any others are filled on the

@@ -73,8 +73,8 @@ pub fn run(
         None => Recursion::TermLists(TermLists::new(programs, coefficient)),
     };
     let inverse_scales = programs.iter().map(|p| 1.0 / p.input_scale).collect();
-    let compiled = Compiled { rests, inverse_scales, recursion };
-    free_run(&compiled, samples, steps, time_step, workspace, sink).map_err(BatchError::Diverged)
+    let compiled = Compiled { rests, inverse_scales, recursion, steps, time_step };
+    free_run(&compiled, samples, workspace, sink).map_err(BatchError::Diverged)
 }
 
 /// Why a batch failed.
