@@ -4,7 +4,7 @@
 //!
 //! Tolerances: at this size the measured validation figures are a roof mean relative error of
 //! 2.3·10⁻³, a peak correlation of 0.9999 and a median peak error of 0.3 %; the assertions sit an
-//! order of magnitude looser (the full-size targets: 0.02, 0.99, 2 %), so they hold for any
+//! order of magnitude looser (the full-size targets: 0.02, 0.99, 2 %), so they hold for any
 //! correct implementation and fail for a broken one.
 
 use serde_json::Value;
