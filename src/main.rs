@@ -38,6 +38,12 @@ enum Command {
     Validate(cli::ValidateArgs),
     /// Exceedance curve of a peak response, sampled from a metamodel.
     Exceedance(cli::ExceedanceArgs),
+    /// Annual exceedance curve, return levels and reliability index under a wind climate.
+    Hazard(cli::HazardArgs),
+    /// Fragility curves P(peak > x | v) over storm speeds, with lognormal fits.
+    Fragility(cli::FragilityArgs),
+    /// Sobol indices of a peak response for every input and the storm's phases.
+    Sensitivity(cli::SensitivityArgs),
     /// Medians of the stages of one full-size storm, measured side by side.
     Bench(cli::BenchArgs),
 }
@@ -53,6 +59,9 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => cli::calibrate(args),
         Command::Validate(args) => cli::validate(args),
         Command::Exceedance(args) => cli::exceedance(args),
+        Command::Hazard(args) => cli::hazard(args),
+        Command::Fragility(args) => cli::fragility(args),
+        Command::Sensitivity(args) => cli::sensitivity(args),
     };
     match result {
         Ok(output) => {

@@ -36,16 +36,12 @@ pub fn automatic_thresholds(peaks: &[f64], count: usize) -> Vec<f64> {
     (0..count).map(|i| lo + (hi - lo) * i as f64 / (count - 1) as f64).collect()
 }
 
-/// Exact binomial interval for k successes in n trials.
-fn clopper_pearson(k: usize, n: usize, confidence: f64) -> (f64, f64) {
+/// Exact binomial (Clopper-Pearson) interval for k successes in n trials; k and n may be
+/// effective counts, not whole (a stratified estimate's, by Korn & Graubard).
+pub(super) fn clopper_pearson(k: f64, n: f64, confidence: f64) -> (f64, f64) {
     let alpha = 1.0 - confidence;
-    let lower =
-        if k == 0 { 0.0 } else { Beta::new(k as f64, (n - k + 1) as f64).map_or(0.0, |b| b.inverse_cdf(alpha / 2.0)) };
-    let upper = if k == n {
-        1.0
-    } else {
-        Beta::new((k + 1) as f64, (n - k) as f64).map_or(1.0, |b| b.inverse_cdf(1.0 - alpha / 2.0))
-    };
+    let lower = if k <= 0.0 { 0.0 } else { Beta::new(k, n - k + 1.0).map_or(0.0, |b| b.inverse_cdf(alpha / 2.0)) };
+    let upper = if k >= n { 1.0 } else { Beta::new(k + 1.0, n - k).map_or(1.0, |b| b.inverse_cdf(1.0 - alpha / 2.0)) };
     (lower, upper)
 }
 
@@ -67,7 +63,7 @@ pub fn exceedance_curve(peaks: &[f64], thresholds: &[f64], confidence: f64) -> E
     let mut upper = Vec::with_capacity(thresholds.len());
     for &x in thresholds {
         let exceeding = n - sorted.partition_point(|&p| p <= x);
-        let (lo, hi) = clopper_pearson(exceeding, n, confidence);
+        let (lo, hi) = clopper_pearson(exceeding as f64, n as f64, confidence);
         probabilities.push(exceeding as f64 / n as f64);
         lower.push(lo);
         upper.push(hi);
@@ -92,6 +88,26 @@ pub fn max_exceedance_gap(a: &[f64], b: &[f64]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Most thresholds a request may list.
+pub const MAX_THRESHOLDS: usize = 10_000;
+/// Largest threshold (m): peaks are absolute values, so thresholds are non-negative, and no
+/// building's displacement or drift comes near a kilometre.
+pub const MAX_THRESHOLD_M: f64 = 1000.0;
+
+/// Errs unless `thresholds` holds 1 to [`MAX_THRESHOLDS`] values in [0, [`MAX_THRESHOLD_M`]].
+pub fn check_thresholds(thresholds: &[f64]) -> Result<()> {
+    if thresholds.is_empty()
+        || thresholds.len() > MAX_THRESHOLDS
+        || thresholds.iter().any(|x| !(0.0..=MAX_THRESHOLD_M).contains(x))
+    {
+        return Err(Error::invalid(
+            "thresholds",
+            format!("must be 1 to {MAX_THRESHOLDS} numbers between 0 and {MAX_THRESHOLD_M} m"),
+        ));
+    }
+    Ok(())
+}
+
 /// Most samples one sampling request may ask for.
 pub const MAX_SAMPLES: usize = 1_000_000;
 
@@ -107,38 +123,63 @@ pub fn metamodel_peaks(
     response: Response,
     observer: &dyn Observer,
 ) -> Result<Vec<f64>> {
+    check_samples(samples)?;
+    let rows = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
+    let storms: Vec<usize> = (0..samples).collect();
+    peaks_at(metamodel, &Draws { problem, rows: &rows, storms: &storms, seed }, response, observer)
+}
+
+/// Errs unless 1 ≤ samples ≤ [`MAX_SAMPLES`].
+pub fn check_samples(samples: usize) -> Result<()> {
     if samples == 0 || samples > MAX_SAMPLES {
         return Err(Error::invalid("samples", format!("must be between 1 and {MAX_SAMPLES}, got {samples}")));
     }
+    Ok(())
+}
+
+/// The storms an analysis runs through the metamodel: row i's physical inputs, and the stream of
+/// the run seeded with `seed` its wind is drawn from (two rows with the same stream see the same
+/// storm phases, which common random numbers and Sobol's pick-freeze designs rely on).
+pub struct Draws<'a> {
+    pub problem: &'a Problem,
+    pub rows: &'a [Vec<f64>],
+    pub storms: &'a [usize],
+    pub seed: u64,
+}
+
+/// Peaks of `response` for every row of `draws`, in parallel by batches of [`LANES`], reporting
+/// progress and stopping when `observer` asks.
+pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observer: &dyn Observer) -> Result<Vec<f64>> {
+    let Draws { problem, rows, storms, seed } = *draws;
+    assert_eq!(rows.len(), storms.len(), "one storm per row");
     response.check(problem.structure.floors())?;
-    let xs = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let path = metamodel.calibration.options.wind;
     let weights = response.weights(&metamodel.modes.shapes);
-    let done = AtomicUsize::new(0);
-    let peaks: Vec<Vec<f64>> = xs
+    let (done, total) = (AtomicUsize::new(0), rows.len());
+    let peaks: Vec<Vec<f64>> = rows
         .par_chunks(LANES)
+        .zip(storms.par_chunks(LANES))
         .enumerate()
         .map_init(
             || (wind::Workspace::default(), BatchWorkspace::default()),
-            |(wind_workspace, batch_workspace), (chunk, xs)| {
+            |(wind_workspace, batch_workspace), (chunk, (xs, keys))| {
                 if observer.cancelled() {
                     return Err(Error::Cancelled);
                 }
-                let first = chunk * LANES;
                 let storms = xs
                     .iter()
-                    .enumerate()
-                    .map(|(i, x)| Ok(problem.sample_storm(x, path, seed, first + i, wind_workspace)?.1))
+                    .zip(keys)
+                    .map(|(x, &k)| Ok(problem.sample_storm(x, path, seed, k, wind_workspace)?.1))
                     .collect::<Result<Vec<_>>>()?;
                 let batch: Vec<(usize, &[f64], &dyn ForceSource)> = xs
                     .iter()
                     .zip(&storms)
                     .enumerate()
-                    .map(|(i, (x, f))| (first + i, &x[..], f as &dyn ForceSource))
+                    .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
                     .collect();
                 let peaks = metamodel.peaks(problem, &batch, &weights, batch_workspace)?;
                 let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();
-                observer.progress(Progress::Samples { done, total: samples });
+                observer.progress(Progress::Samples { done, total });
                 Ok(peaks)
             },
         )
@@ -162,11 +203,11 @@ mod tests {
     /// Clopper-Pearson for 3 of 10 at 95 %: (0.06674, 0.65245) (scipy.stats.binomtest(3, 10).proportion_ci()).
     #[test]
     fn clopper_pearson_matches_scipy() {
-        let (lo, hi) = clopper_pearson(3, 10, 0.95);
+        let (lo, hi) = clopper_pearson(3.0, 10.0, 0.95);
         assert!((lo - 0.066739).abs() < 1e-5, "{lo}");
         assert!((hi - 0.652453).abs() < 1e-5, "{hi}");
-        assert_eq!(clopper_pearson(0, 10, 0.95).0, 0.0);
-        assert_eq!(clopper_pearson(10, 10, 0.95).1, 1.0);
+        assert_eq!(clopper_pearson(0.0, 10.0, 0.95).0, 0.0);
+        assert_eq!(clopper_pearson(10.0, 10.0, 0.95).1, 1.0);
     }
 
     #[test]

@@ -1,17 +1,33 @@
-//! What users read off many storms: peak statistics, exceedance curves with confidence bands, and
-//! the validation of a metamodel against the reference.
+//! What users read off many storms: peak statistics, exceedance curves with confidence bands,
+//! annual curves and return levels under a wind climate, fragility curves, Sobol indices, and the
+//! validation of a metamodel against the reference.
 
+mod climate;
 mod exceedance;
+mod fragility;
+mod hazard;
 mod peaks;
 mod plot;
 mod response;
+mod sobol;
+mod strata;
 mod validation;
 
+pub use climate::ClimateSpec;
 pub use exceedance::{
-    ExceedanceCurve, MAX_SAMPLES, automatic_thresholds, check_confidence, exceedance_curve, max_exceedance_gap,
-    metamodel_peaks,
+    Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD_M, MAX_THRESHOLDS, automatic_thresholds, check_confidence,
+    check_samples, check_thresholds, exceedance_curve, max_exceedance_gap, metamodel_peaks, peaks_at,
+};
+pub use fragility::{
+    Fragility, FragilityCurve, FragilityOptions, LognormalFragility, MAX_WIND_SPEEDS, fragility, metamodel_fragility,
+};
+pub use hazard::{
+    DEFAULT_RETURN_PERIODS, HazardCurve, HazardOptions, MAX_RETURN_PERIOD, Reliability, ReturnLevel, WIND_SPEED,
+    hazard_curve, metamodel_hazard,
 };
 pub use peaks::{PeakSummary, quantile};
-pub use plot::{exceedance_svg, validation_svg};
+pub use plot::{exceedance_svg, fragility_svg, hazard_svg, validation_svg};
 pub use response::Response;
+pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
+pub use strata::Sampling;
 pub use validation::{ValidationReport, validate};

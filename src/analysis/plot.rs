@@ -1,8 +1,9 @@
-//! SVG figures: exceedance curves with their bands (the paper's Fig. 7) and the scatter of peaks,
-//! reference against metamodel (Fig. 6). Text only, no fonts needed.
+//! SVG figures: exceedance curves with their bands (the paper's Fig. 7), the scatter of peaks,
+//! reference against metamodel (Fig. 6), annual curves with return levels, and fragility curves.
 
-use super::ExceedanceCurve;
+use super::{ExceedanceCurve, Fragility, HazardCurve};
 use plotters::prelude::*;
+use statrs::distribution::{ContinuousCDF, Normal};
 
 /// Largest magnitude an axis spans; plotters' tick search does not end on an infinite or
 /// overflowing range, so values beyond are clipped to it (no response of a building comes near).
@@ -59,16 +60,23 @@ fn draw_curves(
     let _ = chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw();
 }
 
-/// Exceedance curves with their confidence bands.
-pub fn exceedance_svg(curves: &[(&str, &ExceedanceCurve)], x_label: &str) -> String {
+type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+
+/// An SVG of `size` pixels on a white ground, drawn by `draw`.
+fn render(size: (u32, u32), draw: impl FnOnce(&Area<'_>)) -> String {
     let mut svg = String::new();
     {
-        let root = SVGBackend::with_string(&mut svg, (720, 480)).into_drawing_area();
+        let root = SVGBackend::with_string(&mut svg, size).into_drawing_area();
         let _ = root.fill(&WHITE);
-        draw_curves(&root, curves, x_label);
+        draw(&root);
         let _ = root.present();
     }
     svg
+}
+
+/// Exceedance curves with their confidence bands.
+pub fn exceedance_svg(curves: &[(&str, &ExceedanceCurve)], x_label: &str) -> String {
+    render((720, 480), |root| draw_curves(root, curves, x_label))
 }
 
 /// Validation figure: peaks scatter (left) and both exceedance curves (right).
@@ -100,6 +108,101 @@ pub fn validation_svg(reference: &[f64], metamodel: &[f64], curves: &[(&str, &Ex
         let _ = root.present();
     }
     svg
+}
+
+/// The annual exceedance curve with its band on a logarithmic probability axis, the mean
+/// recurrence interval 1/P on the right-hand axis, and the return levels marked.
+pub fn hazard_svg(curve: &HazardCurve, x_label: &str) -> String {
+    let positive = |p: f64| p.is_finite() && p > 0.0;
+    let floor = curve
+        .lower
+        .iter()
+        .chain(&curve.annual_probability)
+        .copied()
+        .filter(|p| positive(*p))
+        .fold(1.0, f64::min)
+        .max(1e-12)
+        / 2.0;
+    render((760, 500), |root| {
+        let x_range = axis_range(curve.thresholds.iter().copied(), 0.02);
+        let Ok(mut chart) = ChartBuilder::on(root)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(64)
+            .right_y_label_area_size(64)
+            .build_cartesian_2d(x_range.clone(), (floor..1.0).log_scale())
+            .map(|chart| chart.set_secondary_coord(x_range, (1.0..1.0 / floor).log_scale()))
+        else {
+            return;
+        };
+        let _ = chart.configure_mesh().x_desc(x_label).y_desc("annual P(peak > x)").draw();
+        let _ = chart.configure_secondary_axes().y_desc("mean recurrence interval (years)").draw();
+        let clip = |p: f64| p.clamp(floor, 1.0);
+        let band: Vec<(f64, f64)> = curve
+            .thresholds
+            .iter()
+            .zip(&curve.upper)
+            .map(|(x, p)| (*x, clip(*p)))
+            .chain(curve.thresholds.iter().zip(&curve.lower).rev().map(|(x, p)| (*x, clip(*p))))
+            .collect();
+        let _ = chart.draw_series(std::iter::once(Polygon::new(band, COLOURS[0].mix(0.15).filled())));
+        let line = curve
+            .thresholds
+            .iter()
+            .zip(&curve.annual_probability)
+            .filter(|(_, p)| positive(**p))
+            .map(|(x, p)| (*x, *p));
+        let _ = chart.draw_series(LineSeries::new(line, COLOURS[0].stroke_width(2)));
+        let marks = curve.return_levels.iter().filter_map(|r| Some((r.value?, 1.0 / r.return_period_years)));
+        let _ = chart.draw_series(marks.clone().map(|(x, p)| Circle::new((x, p), 4, COLOURS[1].filled())));
+        let _ = chart.draw_series(marks.map(|(x, p)| {
+            Text::new(format!("{:.0} y", 1.0 / p), (x, p), ("sans-serif", 12).into_font().color(&COLOURS[1]))
+        }));
+    })
+}
+
+/// Fragility curves P(peak > x | v) with their bands, and the fitted lognormal fragilities dashed.
+pub fn fragility_svg(fragility: &Fragility, x_label: &str) -> String {
+    render((760, 500), |root| {
+        let range = axis_range(fragility.wind_speeds.iter().copied(), 0.02);
+        let Ok(mut chart) = ChartBuilder::on(root)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(56)
+            .build_cartesian_2d(range.clone(), 0.0..1.0)
+        else {
+            return;
+        };
+        let _ = chart.configure_mesh().x_desc("storm mean wind speed v (m/s)").y_desc("P(peak > x | v)").draw();
+        let speeds = &fragility.wind_speeds;
+        for (i, curve) in fragility.curves.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            let band: Vec<(f64, f64)> = speeds
+                .iter()
+                .zip(&curve.upper)
+                .map(|(v, p)| (*v, *p))
+                .chain(speeds.iter().zip(&curve.lower).rev().map(|(v, p)| (*v, *p)))
+                .collect();
+            let _ = chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.15).filled())));
+            let line = speeds.iter().zip(&curve.probability).map(|(v, p)| (*v, *p));
+            if let Ok(series) = chart.draw_series(LineSeries::new(line, colour.stroke_width(2))) {
+                let label = format!("{x_label} > {:.4} m", curve.threshold);
+                series
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2)));
+            }
+            if let Some(fit) = &curve.lognormal {
+                let normal = Normal::standard();
+                let (lo, hi) = (range.start.max(1e-3), range.end);
+                let fitted = (0..=100).map(|k| {
+                    let v = lo + (hi - lo) * k as f64 / 100.0;
+                    (v, normal.cdf((v / fit.median_speed).ln() / fit.dispersion))
+                });
+                let _ = chart.draw_series(DashedLineSeries::new(fitted, 6, 4, colour.stroke_width(1)));
+            }
+        }
+        let _ = chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw();
+    })
 }
 
 #[cfg(test)]

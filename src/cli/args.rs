@@ -1,5 +1,6 @@
-//! Arguments shared by the commands that set up a study.
+//! Arguments shared by the commands: the study, the response, the output file.
 
+use crate::analysis::Response;
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
 use crate::uncertainty::parse_assignment;
@@ -56,4 +57,44 @@ impl ProblemArgs {
         }
         Ok(problem)
     }
+}
+
+/// Which peak response a command is about.
+#[derive(Debug, Clone, Args)]
+pub struct ResponseArgs {
+    /// Floor of the response (default: the roof).
+    #[arg(long)]
+    pub floor: Option<usize>,
+    /// The inter-storey drift below the floor instead of its displacement.
+    #[arg(long)]
+    pub drift: bool,
+}
+
+impl ResponseArgs {
+    pub fn response(&self, problem: &Problem) -> Response {
+        let floor = self.floor.unwrap_or(problem.structure.floors());
+        if self.drift { Response::Drift { floor } } else { Response::Displacement { floor } }
+    }
+}
+
+/// A human name of a response, for tables and axes.
+pub fn describe(response: Response) -> String {
+    match response {
+        Response::Displacement { floor } => format!("displacement of floor {floor}"),
+        Response::Drift { floor } => format!("drift below floor {floor}"),
+    }
+}
+
+/// The format of `--out` by its extension, one of `allowed`.
+pub fn out_format(out: Option<&std::path::Path>, allowed: &[&str]) -> Result<Option<String>> {
+    let Some(path) = out else { return Ok(None) };
+    match path.extension().and_then(|e| e.to_str()) {
+        Some(e) if allowed.contains(&e) => Ok(Some(e.to_string())),
+        _ => Err(Error::invalid("out", format!("the file must end in .{}", allowed.join(", .")))),
+    }
+}
+
+/// Writes an output file, naming it in the error.
+pub fn write_out(path: &std::path::Path, text: &str) -> Result<()> {
+    std::fs::write(path, text).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))
 }

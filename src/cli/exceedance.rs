@@ -1,10 +1,10 @@
 //! `windmeta exceedance`: the exceedance curve of a peak response, sampled from a metamodel.
 
+use super::args::{ResponseArgs, describe, out_format, write_out};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    ExceedanceCurve, Response, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg,
-    metamodel_peaks,
+    ExceedanceCurve, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg, metamodel_peaks,
 };
 use crate::error::{Error, Result};
 use crate::uncertainty::parse_assignment;
@@ -21,12 +21,8 @@ pub struct ExceedanceArgs {
     pub samples: usize,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
-    /// Floor of the response (default: the roof).
-    #[arg(long)]
-    pub floor: Option<usize>,
-    /// The inter-storey drift below the floor instead of its displacement.
-    #[arg(long)]
-    pub drift: bool,
+    #[command(flatten)]
+    pub response: ResponseArgs,
     /// Hold the mean wind speed (m/s): a curve conditional on it.
     #[arg(long, allow_negative_numbers = true)]
     pub wind_speed: Option<f64>,
@@ -54,16 +50,9 @@ fn csv_text(curve: &ExceedanceCurve) -> String {
 
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     check_confidence(args.confidence)?;
-    let format = match &args.out {
-        None => None,
-        Some(path) => match path.extension().and_then(|e| e.to_str()) {
-            Some(e @ ("csv" | "json" | "svg")) => Some(e.to_string()),
-            _ => return Err(Error::invalid("out", "the file must end in .csv, .json or .svg")),
-        },
-    };
+    let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, problem) = read_metamodel(&args.model)?;
-    let floor = args.floor.unwrap_or(problem.structure.floors());
-    let response = if args.drift { Response::Drift { floor } } else { Response::Displacement { floor } };
+    let response = args.response.response(&problem);
     let mut inputs = problem.inputs.clone();
     if let Some(v) = args.wind_speed {
         inputs = inputs.with_fixed("wind_speed", v)?;
@@ -82,7 +71,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     let seconds = started.elapsed().as_secs_f64();
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
     let curve = exceedance_curve(&peaks, &thresholds, args.confidence);
-    let what = if args.drift { format!("drift below floor {floor}") } else { format!("displacement of floor {floor}") };
+    let what = describe(response);
     if let (Some(path), Some(format)) = (&args.out, format) {
         let text = match format.as_str() {
             "csv" => csv_text(&curve),
@@ -90,7 +79,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
                 .expect("plain JSON"),
             _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x (m)")),
         };
-        std::fs::write(path, text).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
+        write_out(path, &text)?;
     }
     let mut out = format!("peak {what}: {} samples in {seconds:.2} s\n", args.samples);
     out += &format!("{:>12}  {:>10}  {:>10}  {:>10}\n", "x (m)", "P(peak>x)", "lower", "upper");

@@ -1,12 +1,15 @@
 //! The offline commands: what `windmeta modes`, `simulate`, `sample-peaks`, `calibrate`, `validate`,
-//! `exceedance` and `bench` do, as functions of their parsed arguments. `main.rs` only parses and dispatches.
+//! `exceedance`, `hazard`, `fragility`, `sensitivity` and `bench` do, as functions of their parsed arguments. `main.rs` only parses and dispatches.
 
 mod args;
 mod bench;
 mod calibrate;
 mod exceedance;
+mod fragility;
+mod hazard;
 mod modes;
 mod peaks;
+mod sensitivity;
 mod simulate;
 mod validate;
 
@@ -14,8 +17,11 @@ pub use args::ProblemArgs;
 pub use bench::{BenchArgs, BenchReport, BenchRow, bench, bench_report, table};
 pub use calibrate::{CalibrateArgs, calibrate};
 pub use exceedance::{ExceedanceArgs, exceedance};
+pub use fragility::{FragilityArgs, fragility};
+pub use hazard::{HazardArgs, hazard};
 pub use modes::{ModesArgs, modes};
 pub use peaks::{SamplePeaksArgs, sample_peaks};
+pub use sensitivity::{SensitivityArgs, sensitivity};
 pub use simulate::{SimulateArgs, simulate};
 pub use validate::{ValidateArgs, validate};
 

@@ -5,7 +5,9 @@ use super::ServeArgs;
 use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
 use crate::analysis::exceedance_svg;
-use crate::analysis::{Response, automatic_thresholds, check_confidence, exceedance_curve, metamodel_peaks};
+use crate::analysis::{
+    Response, automatic_thresholds, check_confidence, check_thresholds, exceedance_curve, metamodel_peaks,
+};
 use crate::error::{Error, Result, require_finite};
 use crate::problem::Problem;
 use crate::structure::MAX_FLOORS;
@@ -71,12 +73,6 @@ impl Default for ExceedanceRequest {
     }
 }
 
-/// Most thresholds a request may list.
-const MAX_THRESHOLDS: usize = 10_000;
-/// Largest threshold (m): peaks are absolute values, so thresholds are non-negative, and no
-/// building's displacement or drift comes near a kilometre.
-const MAX_THRESHOLD_M: f64 = 1000.0;
-
 impl ExceedanceRequest {
     /// The checks that need no metamodel; errors name the field.
     pub fn check(&self, config: &ServeArgs) -> Result<()> {
@@ -84,13 +80,8 @@ impl ExceedanceRequest {
             return Err(Error::invalid("samples", format!("must be between 1 and {}", config.max_samples)));
         }
         check_confidence(self.confidence)?;
-        if let Some(t) = &self.thresholds
-            && (t.is_empty() || t.len() > MAX_THRESHOLDS || t.iter().any(|x| !(0.0..=MAX_THRESHOLD_M).contains(x)))
-        {
-            return Err(Error::invalid(
-                "thresholds",
-                format!("must be 1 to {MAX_THRESHOLDS} numbers between 0 and {MAX_THRESHOLD_M} m"),
-            ));
+        if let Some(thresholds) = &self.thresholds {
+            check_thresholds(thresholds)?;
         }
         if let Some(floor) = self.floor
             && !(1..=MAX_FLOORS).contains(&floor)

@@ -154,6 +154,15 @@ impl Metamodel {
         Problem::from_spec(&self.problem)
     }
 
+    /// The lowest and highest value of a named input over the calibration's experiments: where
+    /// the expansions were fitted, beyond which they extrapolate.
+    pub fn calibrated_range(&self, problem: &Problem, name: &str) -> Result<[f64; 2]> {
+        let index = problem.inputs.index_of(name)?;
+        let design = super::phases::design(problem, &self.calibration.options);
+        let values = design.iter().map(|x| x[index]);
+        Ok([values.clone().fold(f64::INFINITY, f64::min), values.fold(f64::NEG_INFINITY, f64::max)])
+    }
+
     /// The NARX coefficients of every mode at a physical input sample.
     pub fn coefficients(&self, problem: &Problem, x: &[f64]) -> Vec<Vec<f64>> {
         let xi = problem.inputs.to_standard(x);

@@ -170,13 +170,19 @@ pub struct Planned {
     pub seconds: StageSeconds,
 }
 
+/// The calibration's Latin-hypercube design: a function of the input model, the number of
+/// experiments and the seed alone, so a stored metamodel can say where it was calibrated.
+pub fn design(problem: &Problem, options: &CalibrationOptions) -> Vec<Vec<f64>> {
+    latin_hypercube(&problem.inputs, options.experiments, &mut rng_from_seed(options.seed))
+}
+
 /// Phase 1: the design, the selection experiments through the reference (in parallel), the
 /// deviations' scales and every mode's structure.
 pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
     options.validate()?;
     let cancel = || observer.cancelled();
     let started = Instant::now();
-    let design = latin_hypercube(&problem.inputs, options.experiments, &mut rng_from_seed(options.seed));
+    let design = design(problem, options);
     let k = design.len();
     let stride = (k as f64 / options.selection_experiments.min(k) as f64).max(1.0);
     let selection: Vec<usize> =

@@ -29,6 +29,16 @@ pub enum Marginal {
         mean: f64,
         sd: f64,
     },
+    /// Gumbel (extreme value type I): F(x) = exp(−exp(−(x − location)/scale)).
+    Gumbel {
+        location: f64,
+        scale: f64,
+    },
+    /// Weibull (location 0) given by its mean and standard deviation.
+    Weibull {
+        mean: f64,
+        sd: f64,
+    },
     Constant {
         value: f64,
     },
@@ -59,17 +69,24 @@ impl Marginal {
                 require_finite(&format!("{field}.mean"), mean)?;
                 require_positive(&format!("{field}.sd"), sd)?;
             }
-            Marginal::Lognormal { mean, sd } | Marginal::Frechet { mean, sd } => {
+            Marginal::Lognormal { mean, sd } | Marginal::Frechet { mean, sd } | Marginal::Weibull { mean, sd } => {
                 require_positive(&format!("{field}.mean"), mean)?;
                 require_positive(&format!("{field}.sd"), sd)?;
-                if let Marginal::Frechet { .. } = self
-                    && sd / mean > 1.0
-                {
+                let (family, largest) = match self {
+                    Marginal::Frechet { .. } => ("Fréchet", 1.0),
+                    Marginal::Weibull { .. } => ("Weibull", WEIBULL_MAX_COV),
+                    _ => ("lognormal", f64::INFINITY),
+                };
+                if sd / mean > largest {
                     return Err(Error::invalid(
                         format!("{field}.sd"),
-                        "a Fréchet coefficient of variation above 1 is not supported",
+                        format!("a {family} coefficient of variation above {largest} is not supported"),
                     ));
                 }
+            }
+            Marginal::Gumbel { location, scale } => {
+                require_finite(&format!("{field}.location"), location)?;
+                require_positive(&format!("{field}.scale"), scale)?;
             }
             Marginal::Uniform { lower, upper } => {
                 require_finite(&format!("{field}.lower"), lower)?;
@@ -90,7 +107,11 @@ impl Marginal {
 
     pub fn mean(&self) -> f64 {
         match *self {
-            Marginal::Normal { mean, .. } | Marginal::Lognormal { mean, .. } | Marginal::Frechet { mean, .. } => mean,
+            Marginal::Normal { mean, .. }
+            | Marginal::Lognormal { mean, .. }
+            | Marginal::Frechet { mean, .. }
+            | Marginal::Weibull { mean, .. } => mean,
+            Marginal::Gumbel { location, scale } => location + EULER_GAMMA * scale,
             Marginal::Uniform { lower, upper } => 0.5 * (lower + upper),
             Marginal::Constant { value } => value,
         }
@@ -99,8 +120,8 @@ impl Marginal {
     /// The closed support [lower, upper] (infinite ends allowed).
     pub fn support(&self) -> (f64, f64) {
         match *self {
-            Marginal::Normal { .. } => (f64::NEG_INFINITY, f64::INFINITY),
-            Marginal::Lognormal { .. } | Marginal::Frechet { .. } => (0.0, f64::INFINITY),
+            Marginal::Normal { .. } | Marginal::Gumbel { .. } => (f64::NEG_INFINITY, f64::INFINITY),
+            Marginal::Lognormal { .. } | Marginal::Frechet { .. } | Marginal::Weibull { .. } => (0.0, f64::INFINITY),
             Marginal::Uniform { lower, upper } => (lower, upper),
             Marginal::Constant { value } => (value, value),
         }
@@ -109,7 +130,9 @@ impl Marginal {
     /// Whether `x` is a value this marginal can take (open at 0 for the positive families).
     pub fn contains(&self, x: f64) -> bool {
         match *self {
-            Marginal::Lognormal { .. } | Marginal::Frechet { .. } => x > 0.0 && x.is_finite(),
+            Marginal::Lognormal { .. } | Marginal::Frechet { .. } | Marginal::Weibull { .. } => {
+                x > 0.0 && x.is_finite()
+            }
             _ => {
                 let (lo, hi) = self.support();
                 x.is_finite() && x >= lo && x <= hi
@@ -119,7 +142,11 @@ impl Marginal {
 
     pub fn standard_space(&self) -> StandardSpace {
         match self {
-            Marginal::Normal { .. } | Marginal::Lognormal { .. } | Marginal::Frechet { .. } => StandardSpace::Gaussian,
+            Marginal::Normal { .. }
+            | Marginal::Lognormal { .. }
+            | Marginal::Frechet { .. }
+            | Marginal::Gumbel { .. }
+            | Marginal::Weibull { .. } => StandardSpace::Gaussian,
             Marginal::Uniform { .. } => StandardSpace::Uniform,
             Marginal::Constant { .. } => StandardSpace::Fixed,
         }
@@ -144,7 +171,88 @@ impl Marginal {
                 let (shape, scale) = frechet_parameters(mean, sd);
                 scale * (-p.ln()).powf(-1.0 / shape)
             }
+            Marginal::Gumbel { location, scale } => location - scale * (-p.ln()).ln(),
+            Marginal::Weibull { mean, sd } => {
+                let (shape, scale) = weibull_parameters(mean, sd);
+                scale * (-(-p).ln_1p()).powf(1.0 / shape)
+            }
             Marginal::Constant { value } => value,
+        }
+    }
+
+    /// The lower and upper tail probabilities (F(x), 1 − F(x)) of the families whose far tails need
+    /// their own digits, each computed without cancellation.
+    fn tails(&self, x: f64) -> Option<(f64, f64)> {
+        // F = exp(−t): the upper tail is −expm1(−t).
+        let maximum_type = |t: f64| ((-t).exp(), -(-t).exp_m1());
+        match *self {
+            Marginal::Frechet { mean, sd } => {
+                let (shape, scale) = frechet_parameters(mean, sd);
+                Some(if x <= 0.0 { (0.0, 1.0) } else { maximum_type((x / scale).powf(-shape)) })
+            }
+            Marginal::Gumbel { location, scale } => Some(maximum_type((-(x - location) / scale).exp())),
+            Marginal::Weibull { mean, sd } => {
+                // 1 − F = exp(−t).
+                let (shape, scale) = weibull_parameters(mean, sd);
+                let t = (x.max(0.0) / scale).powf(shape);
+                Some((-(-t).exp_m1(), (-t).exp()))
+            }
+            _ => None,
+        }
+    }
+
+    /// 1 − F(x), exact in the far upper tail where 1 − cdf(x) would cancel.
+    pub fn survival(&self, x: f64) -> f64 {
+        match (self.tails(x), self) {
+            (Some((_, upper)), _) => upper,
+            (None, Marginal::Normal { .. }) => std_normal().cdf(-self.to_standard(x)),
+            (None, Marginal::Lognormal { .. }) if x > 0.0 => std_normal().cdf(-self.to_standard(x)),
+            _ => 1.0 - self.cdf(x),
+        }
+    }
+
+    /// The quantile of upper-tail probability q: F⁻¹(1 − q), exact for tiny q.
+    pub fn upper_quantile(&self, q: f64) -> f64 {
+        match *self {
+            Marginal::Frechet { mean, sd } => {
+                let (shape, scale) = frechet_parameters(mean, sd);
+                scale * (-(-q).ln_1p()).powf(-1.0 / shape)
+            }
+            Marginal::Gumbel { location, scale } => location - scale * (-(-q).ln_1p()).ln(),
+            Marginal::Weibull { mean, sd } => {
+                let (shape, scale) = weibull_parameters(mean, sd);
+                scale * (-q.ln()).powf(1.0 / shape)
+            }
+            Marginal::Normal { .. } | Marginal::Lognormal { .. } => self.from_standard(-std_normal().inverse_cdf(q)),
+            _ => self.quantile(1.0 - q),
+        }
+    }
+
+    /// Probability density function.
+    pub fn pdf(&self, x: f64) -> f64 {
+        let phi = |z: f64| (-0.5 * z * z).exp() / (2.0 * std::f64::consts::PI).sqrt();
+        match *self {
+            Marginal::Normal { mean, sd } => phi((x - mean) / sd) / sd,
+            Marginal::Lognormal { mean, sd } if x > 0.0 => {
+                let (lambda, zeta) = Self::lognormal_parameters(mean, sd);
+                phi((x.ln() - lambda) / zeta) / (x * zeta)
+            }
+            Marginal::Uniform { lower, upper } if (lower..=upper).contains(&x) => 1.0 / (upper - lower),
+            Marginal::Frechet { mean, sd } if x > 0.0 => {
+                let (shape, scale) = frechet_parameters(mean, sd);
+                let t = (x / scale).powf(-shape);
+                shape / x * t * (-t).exp()
+            }
+            Marginal::Gumbel { location, scale } => {
+                let t = (-(x - location) / scale).exp();
+                t * (-t).exp() / scale
+            }
+            Marginal::Weibull { mean, sd } if x > 0.0 => {
+                let (shape, scale) = weibull_parameters(mean, sd);
+                let t = (x / scale).powf(shape);
+                shape / x * t * (-t).exp()
+            }
+            _ => 0.0,
         }
     }
 
@@ -160,12 +268,8 @@ impl Marginal {
                 std_normal().cdf((x.ln() - lambda) / zeta)
             }
             Marginal::Uniform { lower, upper } => ((x - lower) / (upper - lower)).clamp(0.0, 1.0),
-            Marginal::Frechet { mean, sd } => {
-                if x <= 0.0 {
-                    return 0.0;
-                }
-                let (shape, scale) = frechet_parameters(mean, sd);
-                (-(x / scale).powf(-shape)).exp()
+            Marginal::Frechet { .. } | Marginal::Gumbel { .. } | Marginal::Weibull { .. } => {
+                self.tails(x).map_or(0.0, |(lower, _)| lower)
             }
             Marginal::Constant { value } => {
                 if x < value {
@@ -186,16 +290,10 @@ impl Marginal {
                 (x.ln() - lambda) / zeta
             }
             Marginal::Uniform { lower, upper } => 2.0 * (x - lower) / (upper - lower) - 1.0,
-            Marginal::Frechet { mean, sd } => {
-                // Φ⁻¹(F(x)) computed from the smaller tail so that the far upper tail keeps its digits.
-                let (shape, scale) = frechet_parameters(mean, sd);
-                let t = (x / scale).powf(-shape);
-                let upper_tail = -(-t).exp_m1();
-                if upper_tail < 0.5 {
-                    -std_normal().inverse_cdf(upper_tail)
-                } else {
-                    std_normal().inverse_cdf((-t).exp())
-                }
+            // Φ⁻¹(F(x)) computed from the smaller tail so that the far tails keep their digits.
+            Marginal::Frechet { .. } | Marginal::Gumbel { .. } | Marginal::Weibull { .. } => {
+                let (lower, upper) = self.tails(x).expect("an extreme-value family has tails");
+                if upper < 0.5 { -std_normal().inverse_cdf(upper) } else { std_normal().inverse_cdf(lower) }
             }
             Marginal::Constant { .. } => 0.0,
         }
@@ -216,22 +314,28 @@ impl Marginal {
                 let minus_ln_p = if xi > 0.0 { -(-std_normal().cdf(-xi)).ln_1p() } else { -std_normal().cdf(xi).ln() };
                 scale * minus_ln_p.powf(-1.0 / shape)
             }
+            Marginal::Gumbel { .. } | Marginal::Weibull { .. } => {
+                if xi > 0.0 {
+                    self.upper_quantile(std_normal().cdf(-xi))
+                } else {
+                    self.quantile(std_normal().cdf(xi))
+                }
+            }
             Marginal::Constant { value } => value,
         }
     }
 }
 
-/// Shape k and scale s of a Fréchet law with location 0 and the given mean and standard deviation:
-/// mean = s Γ(1 − 1/k), var = s² (Γ(1 − 2/k) − Γ(1 − 1/k)²). The coefficient of variation falls
-/// monotonically in k, so bisection on k finds it, down to adjacent floating-point numbers (about
-/// 60 halvings; it runs for every sample drawn, so it stops there).
-pub fn frechet_parameters(mean: f64, sd: f64) -> (f64, f64) {
-    let cov2 = (sd / mean).powi(2);
-    let cov2_of = |k: f64| {
-        let g1 = gamma(1.0 - 1.0 / k);
-        gamma(1.0 - 2.0 / k) / (g1 * g1) - 1.0
-    };
-    let (mut lo, mut hi) = (2.0 + 1e-9, 1.0e4);
+/// Euler-Mascheroni constant: the mean of the standard Gumbel law.
+const EULER_GAMMA: f64 = 0.577_215_664_901_532_9;
+
+/// Largest Weibull coefficient of variation accepted (shape 0.2; wider laws overflow Γ).
+const WEIBULL_MAX_COV: f64 = 15.0;
+
+/// The shape at which a family's squared coefficient of variation, falling in the shape on
+/// [lo, hi], equals `cov2`: bisection down to adjacent floating-point numbers (about 60 halvings;
+/// it runs for every sample drawn, so it stops there).
+fn shape_for_cov(cov2: f64, cov2_of: impl Fn(f64) -> f64, (mut lo, mut hi): (f64, f64)) -> f64 {
     for _ in 0..200 {
         let mid = 0.5 * (lo + hi);
         if mid <= lo || mid >= hi {
@@ -239,7 +343,29 @@ pub fn frechet_parameters(mean: f64, sd: f64) -> (f64, f64) {
         }
         if cov2_of(mid) > cov2 { lo = mid } else { hi = mid }
     }
-    let shape = 0.5 * (lo + hi);
+    0.5 * (lo + hi)
+}
+
+/// Shape k and scale s of a Weibull law with the given mean and standard deviation:
+/// mean = s Γ(1 + 1/k), var = s² (Γ(1 + 2/k) − Γ(1 + 1/k)²).
+pub fn weibull_parameters(mean: f64, sd: f64) -> (f64, f64) {
+    let cov2_of = |k: f64| {
+        let g1 = gamma(1.0 + 1.0 / k);
+        gamma(1.0 + 2.0 / k) / (g1 * g1) - 1.0
+    };
+    let shape = shape_for_cov((sd / mean).powi(2), cov2_of, (0.2, 1.0e4));
+    (shape, mean / gamma(1.0 + 1.0 / shape))
+}
+
+/// Shape k and scale s of a Fréchet law with location 0 and the given mean and standard deviation:
+/// mean = s Γ(1 − 1/k), var = s² (Γ(1 − 2/k) − Γ(1 − 1/k)²). The coefficient of variation falls
+/// monotonically in k, so bisection on k finds it.
+pub fn frechet_parameters(mean: f64, sd: f64) -> (f64, f64) {
+    let cov2_of = |k: f64| {
+        let g1 = gamma(1.0 - 1.0 / k);
+        gamma(1.0 - 2.0 / k) / (g1 * g1) - 1.0
+    };
+    let shape = shape_for_cov((sd / mean).powi(2), cov2_of, (2.0 + 1e-9, 1.0e4));
     (shape, mean / gamma(1.0 - 1.0 / shape))
 }
 
@@ -266,6 +392,8 @@ mod tests {
             Marginal::Lognormal { mean: 210e9, sd: 15e9 },
             Marginal::Uniform { lower: 0.0, upper: 100.0 },
             Marginal::Frechet { mean: 30.0, sd: 3.5 },
+            Marginal::Gumbel { location: 25.0, scale: 2.5 },
+            Marginal::Weibull { mean: 30.0, sd: 3.5 },
         ];
         for m in marginals {
             for p in [1e-6, 0.01, 0.3, 0.5, 0.9, 0.999, 1.0 - 1e-9] {
@@ -280,6 +408,67 @@ mod tests {
                     _ => 0.5 * (xi + 1.0),
                 };
                 assert!((q - p).abs() < 1e-7 * p.max(1e-3), "{m:?} p={p} q={q}");
+            }
+        }
+    }
+
+    /// Weibull moments recomputed from Γ; Gumbel's mean is location + γ·scale and its quantiles
+    /// the closed form (scipy.stats.gumbel_r(25, 2.5).isf(1e-5) = 53.7823...).
+    #[test]
+    fn weibull_and_gumbel_match_closed_forms() {
+        let (k, s) = weibull_parameters(30.0, 3.5);
+        let mean = s * gamma(1.0 + 1.0 / k);
+        let var = s * s * (gamma(1.0 + 2.0 / k) - gamma(1.0 + 1.0 / k).powi(2));
+        assert!((mean - 30.0).abs() < 1e-9 && (var.sqrt() - 3.5).abs() < 1e-9, "{mean} {var}");
+        let g = Marginal::Gumbel { location: 25.0, scale: 2.5 };
+        assert!((g.mean() - (25.0 + 2.5 * 0.5772156649)).abs() < 1e-9);
+        let x = g.upper_quantile(1e-5);
+        assert!((x - (25.0 - 2.5 * (-(-1e-5f64).ln_1p()).ln())).abs() < 1e-12);
+        assert!((g.survival(x) / 1e-5 - 1.0).abs() < 1e-10, "{}", g.survival(x));
+    }
+
+    /// The density integrates to the distribution function (Simpson's rule over [a, b]).
+    #[test]
+    fn densities_integrate_to_the_cdf() {
+        for m in [
+            Marginal::Frechet { mean: 30.0, sd: 3.5 },
+            Marginal::Gumbel { location: 25.0, scale: 2.5 },
+            Marginal::Weibull { mean: 30.0, sd: 3.5 },
+            Marginal::Lognormal { mean: 1.0, sd: 0.2 },
+        ] {
+            let (a, b) = (m.quantile(0.01), m.quantile(0.99));
+            let n = 2000;
+            let h = (b - a) / n as f64;
+            let integral: f64 = (0..=n)
+                .map(|i| {
+                    let w = if i == 0 || i == n {
+                        1.0
+                    } else if i % 2 == 1 {
+                        4.0
+                    } else {
+                        2.0
+                    };
+                    w * m.pdf(a + i as f64 * h)
+                })
+                .sum::<f64>()
+                * h
+                / 3.0;
+            assert!((integral - 0.98).abs() < 1e-6, "{m:?}: {integral}");
+        }
+    }
+
+    #[test]
+    fn upper_quantiles_keep_their_digits_in_the_far_tail() {
+        for m in [
+            Marginal::Frechet { mean: 30.0, sd: 3.5 },
+            Marginal::Gumbel { location: 25.0, scale: 2.5 },
+            Marginal::Weibull { mean: 30.0, sd: 3.5 },
+            Marginal::Normal { mean: 1.0, sd: 2.0 },
+            Marginal::Lognormal { mean: 1.0, sd: 0.2 },
+        ] {
+            for q in [1e-3, 1e-7, 1e-12] {
+                let x = m.upper_quantile(q);
+                assert!((m.survival(x) / q - 1.0).abs() < 1e-6, "{m:?} q={q}: {}", m.survival(x));
             }
         }
     }

@@ -1,0 +1,131 @@
+//! The wind climate: the law of the annual maximum of the storm mean wind speed at the 10 m
+//! station. It turns what one storm does into what a year does: the building's peak in a year is
+//! taken as its peak in the year's strongest storm, so P(annual peak > x) = ∫ P(peak > x | v) f(v) dv.
+
+use crate::error::{Error, Result};
+use crate::uncertainty::Marginal;
+use serde::{Deserialize, Deserializer, Serialize};
+use std::collections::BTreeMap;
+
+/// A climate as a client states it: a marginal of the annual maximum speed (`gumbel` by `location`
+/// and `scale`; `frechet`, `weibull`, `lognormal` by `mean` and `sd`; any other marginal), or the
+/// speeds of two or more return periods, through which a Gumbel law is drawn.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(untagged)]
+pub enum ClimateSpec {
+    /// Speeds (m/s) by return period in years, e.g. `{"50": 32.0, "700": 40.0}`.
+    ReturnPeriodSpeeds {
+        return_period_speeds: BTreeMap<String, f64>,
+    },
+    Marginal(Marginal),
+}
+
+impl<'de> Deserialize<'de> for ClimateSpec {
+    /// By the presence of `return_period_speeds`, so that a malformed marginal is reported as such
+    /// rather than as "no variant matched".
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> std::result::Result<Self, D::Error> {
+        use serde::de::Error as _;
+        let value = serde_json::Value::deserialize(deserializer)?;
+        match value.get("return_period_speeds") {
+            Some(speeds) => {
+                if value.as_object().is_some_and(|o| o.len() > 1) {
+                    return Err(D::Error::custom("`return_period_speeds` takes no other field"));
+                }
+                let speeds = BTreeMap::<String, f64>::deserialize(speeds).map_err(D::Error::custom)?;
+                Ok(ClimateSpec::ReturnPeriodSpeeds { return_period_speeds: speeds })
+            }
+            None => Marginal::deserialize(value).map(ClimateSpec::Marginal).map_err(D::Error::custom),
+        }
+    }
+}
+
+/// The largest station speed the wind model admits (m/s): a climate must put less than 10⁻⁶ a
+/// year beyond it.
+const MAX_SPEED: f64 = 150.0;
+
+impl ClimateSpec {
+    /// The law of the annual maximum speed; errors name the field under `field`.
+    pub fn resolve(&self, field: &str) -> Result<Marginal> {
+        let marginal = match self {
+            ClimateSpec::Marginal(marginal) => {
+                marginal.validate(field)?;
+                *marginal
+            }
+            ClimateSpec::ReturnPeriodSpeeds { return_period_speeds } => {
+                gumbel_through(return_period_speeds, &format!("{field}.return_period_speeds"))?
+            }
+        };
+        if marginal.cdf(0.0) > 1e-9 {
+            return Err(Error::invalid(field, "a wind speed cannot be negative: the law puts weight below 0 m/s"));
+        }
+        if marginal.upper_quantile(1e-6).partial_cmp(&MAX_SPEED) != Some(std::cmp::Ordering::Less) {
+            return Err(Error::invalid(field, format!("puts a probability above 10⁻⁶ beyond {MAX_SPEED} m/s")));
+        }
+        Ok(marginal)
+    }
+}
+
+/// The Gumbel law through speeds v_T of return periods T: v = location + scale·y with the reduced
+/// variate y = −ln(−ln(1 − 1/T)), by least squares (exact through two points).
+fn gumbel_through(speeds: &BTreeMap<String, f64>, field: &str) -> Result<Marginal> {
+    let mut points = Vec::with_capacity(speeds.len());
+    for (years, &speed) in speeds {
+        let period: f64 = years.trim().parse().ok().filter(|t: &f64| t.is_finite() && *t > 1.0).ok_or_else(|| {
+            Error::invalid(format!("{field}.{years}"), "a return period is a number of years above 1")
+        })?;
+        if !(speed.is_finite() && speed > 0.0 && speed < MAX_SPEED) {
+            return Err(Error::invalid(format!("{field}.{years}"), format!("must lie in (0, {MAX_SPEED}) m/s")));
+        }
+        points.push((-(-(-1.0 / period).ln_1p()).ln(), speed));
+    }
+    if points.len() < 2 {
+        return Err(Error::invalid(field, "needs the speeds of at least two return periods"));
+    }
+    let n = points.len() as f64;
+    let (my, mv) = (points.iter().map(|p| p.0).sum::<f64>() / n, points.iter().map(|p| p.1).sum::<f64>() / n);
+    let syy: f64 = points.iter().map(|p| (p.0 - my).powi(2)).sum();
+    let syv: f64 = points.iter().map(|p| (p.0 - my) * (p.1 - mv)).sum();
+    let scale = syv / syy;
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(Error::invalid(field, "speeds must grow with the return period"));
+    }
+    Ok(Marginal::Gumbel { location: mv - scale * my, scale })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two points: the law passes through both (1 − F(v_T) = 1/T).
+    #[test]
+    fn gumbel_through_two_return_period_speeds_passes_through_them() {
+        let spec: ClimateSpec = serde_json::from_str(r#"{"return_period_speeds": {"50": 32.0, "700": 40.0}}"#).unwrap();
+        let law = spec.resolve("climate").unwrap();
+        for (t, v) in [(50.0, 32.0), (700.0, 40.0)] {
+            assert!((law.survival(v) * t - 1.0).abs() < 1e-10, "T = {t}: {}", law.survival(v) * t);
+        }
+    }
+
+    #[test]
+    fn a_marginal_is_a_climate_and_bad_ones_name_the_field() {
+        let spec: ClimateSpec =
+            serde_json::from_str(r#"{"distribution": "gumbel", "location": 25, "scale": 2.5}"#).unwrap();
+        assert_eq!(spec.resolve("climate").unwrap(), Marginal::Gumbel { location: 25.0, scale: 2.5 });
+        let err = serde_json::from_str::<ClimateSpec>(r#"{"distribution": "gumbel", "location": 25}"#).unwrap_err();
+        assert!(err.to_string().contains("scale"), "{err}");
+        let bad = [
+            r#"{"return_period_speeds": {"50": 32.0}}"#,
+            r#"{"return_period_speeds": {"50": 40.0, "700": 32.0}}"#,
+            r#"{"return_period_speeds": {"0.5": 20.0, "700": 32.0}}"#,
+            r#"{"return_period_speeds": {"50": -1.0, "700": 32.0}}"#,
+            r#"{"distribution": "normal", "mean": 30, "sd": 10}"#,
+            r#"{"distribution": "gumbel", "location": 100, "scale": 20}"#,
+        ];
+        for text in bad {
+            let spec: ClimateSpec = serde_json::from_str(text).unwrap();
+            let err = spec.resolve("climate").unwrap_err();
+            assert!(err.to_string().starts_with("climate"), "{text}: {err}");
+        }
+    }
+}

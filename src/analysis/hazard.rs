@@ -1,0 +1,416 @@
+//! Annual exceedance probabilities, return levels and reliability indices of a peak response under
+//! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
+//! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
+
+use super::exceedance::{Draws, automatic_thresholds, check_confidence, check_samples, peaks_at};
+use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
+use super::{Response, check_thresholds};
+use crate::error::{Error, Result};
+use crate::problem::Problem;
+use crate::surrogate::{Metamodel, Observer};
+use crate::uncertainty::{InputModel, Marginal, monte_carlo, rng_from_seed};
+use crate::wind::WindLoads;
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// The wind input every annual analysis replaces by the climate.
+pub const WIND_SPEED: &str = "wind_speed";
+
+/// Return periods (years) reported when none are asked for.
+pub const DEFAULT_RETURN_PERIODS: [f64; 7] = [10.0, 50.0, 100.0, 500.0, 700.0, 1000.0, 10000.0];
+
+/// Longest return period (years) an analysis may ask for: 10⁻⁶ a year, two decades rarer than
+/// the 10⁻⁵ that at most 10⁵ storms resolve with a coefficient of variation below 0.3.
+pub const MAX_RETURN_PERIOD: f64 = 1e6;
+
+/// The largest station speed the wind model admits (m/s).
+const MAX_SPEED: f64 = 150.0;
+
+/// What an annual analysis is asked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HazardOptions {
+    /// The law of the annual maximum storm speed.
+    pub climate: Marginal,
+    pub samples: usize,
+    pub seed: u64,
+    /// Peak values at which to report λ; 50 spread over the sampled peaks when absent.
+    pub thresholds: Option<Vec<f64>>,
+    pub return_periods: Vec<f64>,
+    /// A limit whose annual probability and reliability index are reported.
+    pub limit: Option<f64>,
+    pub confidence: f64,
+    pub sampling: Sampling,
+}
+
+impl HazardOptions {
+    pub fn check(&self) -> Result<()> {
+        check_samples(self.samples)?;
+        check_confidence(self.confidence)?;
+        if let Some(thresholds) = &self.thresholds {
+            check_thresholds(thresholds)?;
+        }
+        if self.return_periods.len() > 100
+            || self.return_periods.iter().any(|t| !(t.is_finite() && *t > 1.0 && *t <= MAX_RETURN_PERIOD))
+        {
+            return Err(Error::invalid(
+                "return_periods",
+                format!("must be at most 100 numbers of years above 1 and at most {MAX_RETURN_PERIOD:e}"),
+            ));
+        }
+        if let Some(limit) = self.limit {
+            check_thresholds(&[limit]).map_err(|_| Error::invalid("limit", "must lie between 0 and 1000 m"))?;
+        }
+        Ok(())
+    }
+
+    /// The smallest annual probability the answer must resolve.
+    fn smallest_probability(&self) -> f64 {
+        self.return_periods.iter().map(|t| 1.0 / t).fold(1e-4, f64::min)
+    }
+}
+
+/// The response level with a given mean recurrence interval.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ReturnLevel {
+    pub return_period_years: f64,
+    /// The level whose annual exceedance probability is 1/T (m); none when the sampled peaks do
+    /// not reach so rare a level.
+    pub value: Option<f64>,
+    /// Where the band's ends cross 1/T.
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+}
+
+/// The annual probability of exceeding a limit and its reliability index β = −Φ⁻¹(P).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct Reliability {
+    pub limit: f64,
+    pub annual_probability: f64,
+    pub lower: f64,
+    pub upper: f64,
+    pub cov: Option<f64>,
+    pub beta: f64,
+    /// β at the band's ends (the upper probability gives the lower β); none where infinite.
+    pub beta_lower: Option<f64>,
+    pub beta_upper: Option<f64>,
+}
+
+/// An annual exceedance curve with its band, return levels and what it leans on.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct HazardCurve {
+    /// Peak values (m).
+    pub thresholds: Vec<f64>,
+    /// P(the year's peak > threshold).
+    pub annual_probability: Vec<f64>,
+    /// The band at `confidence`.
+    pub lower: Vec<f64>,
+    pub upper: Vec<f64>,
+    /// Coefficient of variation of each probability; none where no storm exceeded.
+    pub cov: Vec<Option<f64>>,
+    /// Mean recurrence interval 1/P (years); none where P is 0.
+    pub mri_years: Vec<Option<f64>>,
+    pub return_levels: Vec<ReturnLevel>,
+    pub reliability: Option<Reliability>,
+    /// The law of the annual maximum storm speed at the 10 m station.
+    pub climate: Marginal,
+    /// The wind speeds of the calibration's experiments, lowest and highest (m/s).
+    pub calibrated_wind_range: [f64; 2],
+    /// Per threshold: the part of the annual probability from storms whose speed lies outside the
+    /// calibrated range (where the metamodel extrapolates).
+    pub probability_beyond_calibrated_range: Vec<f64>,
+    /// The climate's probability of a speed outside the calibrated range.
+    pub climate_beyond_calibrated_range: f64,
+    /// The climate's probability of storms too rare to be run; they are counted as exceeding.
+    pub unsampled_probability: f64,
+    pub samples: usize,
+    pub strata: usize,
+    pub sampling: Sampling,
+    pub confidence: f64,
+}
+
+/// The annual curve of the peaks that `peaks_of(rows, first)` returns for input rows drawn from
+/// `inputs` with the wind speed replaced by the climate's (`first`: the number of rows run before,
+/// so that every row gets its own storm). Stratified, a quarter of the storms go equally to the
+/// strata and the rest by Neyman's allocation for the return periods asked for.
+pub fn hazard_curve(
+    inputs: &InputModel,
+    options: &HazardOptions,
+    calibrated: [f64; 2],
+    mut peaks_of: impl FnMut(&[Vec<f64>], usize) -> Result<Vec<f64>>,
+) -> Result<HazardCurve> {
+    options.check()?;
+    let wind = inputs.index_of(WIND_SPEED)?;
+    let strata = match options.sampling {
+        Sampling::Stratified => WindStrata::new(&options.climate, options.smallest_probability(), MAX_SPEED),
+        Sampling::MonteCarlo => WindStrata::monte_carlo(),
+    };
+    let mut rng = rng_from_seed(options.seed);
+    let mut run = 0;
+    let mut stage = |counts: &[usize]| -> Result<(Vec<f64>, Vec<bool>)> {
+        let speeds = strata.speeds(&options.climate, counts, &mut rng);
+        if let Some(&v) = speeds.iter().find(|v| WindLoads::check_speed(**v).is_err()) {
+            return Err(Error::invalid("climate", format!("puts weight on a speed the wind model refuses ({v} m/s)")));
+        }
+        let mut rows = monte_carlo(inputs, speeds.len(), &mut rng);
+        for (row, &v) in rows.iter_mut().zip(&speeds) {
+            row[wind] = v;
+        }
+        let peaks = peaks_of(&rows, run)?;
+        run += rows.len();
+        Ok((peaks, speeds.iter().map(|v| !(calibrated[0]..=calibrated[1]).contains(v)).collect()))
+    };
+    let pilot_share = if strata.count() == 1 { 1 } else { 4 };
+    let pilot_counts = vec![options.samples / pilot_share / strata.count(); strata.count()];
+    if pilot_counts[0] < 2 {
+        return Err(Error::invalid(
+            "samples",
+            format!("must be at least {} for the {} strata", 2 * pilot_share * strata.count(), strata.count()),
+        ));
+    }
+    let (peaks, outside) = stage(&pilot_counts)?;
+    let mut sample = StratifiedPeaks::new(&strata, &pilot_counts, &peaks, &outside);
+    let budget = options.samples - pilot_counts.iter().sum::<usize>();
+    if strata.count() > 1 && budget > 0 {
+        let all = sample.all_peaks();
+        let targets: Vec<f64> = options
+            .return_periods
+            .iter()
+            .chain(&DEFAULT_RETURN_PERIODS[..1])
+            .filter_map(|&t| return_level(&sample, &all, t, options.confidence).value)
+            .collect();
+        let counts = strata.neyman(&sample, &targets, budget);
+        let (peaks, outside) = stage(&counts)?;
+        sample.add(&counts, &peaks, &outside);
+    }
+    let confidence = options.confidence;
+    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&sample.all_peaks(), 50));
+    let estimates: Vec<Estimate> = thresholds.iter().map(|&x| sample.exceedance(x, confidence)).collect();
+    let all = sample.all_peaks();
+    let return_levels = options.return_periods.iter().map(|&t| return_level(&sample, &all, t, confidence)).collect();
+    let reliability = options.limit.map(|limit| reliability(limit, sample.exceedance(limit, confidence)));
+    let climate = &options.climate;
+    Ok(HazardCurve {
+        annual_probability: estimates.iter().map(|e| e.probability).collect(),
+        lower: estimates.iter().map(|e| e.lower).collect(),
+        upper: estimates.iter().map(|e| e.upper).collect(),
+        cov: estimates.iter().map(|e| e.cov).collect(),
+        mri_years: estimates.iter().map(|e| (e.probability > 0.0).then(|| 1.0 / e.probability)).collect(),
+        probability_beyond_calibrated_range: estimates.iter().map(|e| e.beyond).collect(),
+        thresholds,
+        return_levels,
+        reliability,
+        climate: *climate,
+        calibrated_wind_range: calibrated,
+        climate_beyond_calibrated_range: climate.cdf(calibrated[0]) + climate.survival(calibrated[1]),
+        unsampled_probability: strata.unsampled(),
+        samples: run,
+        strata: strata.count(),
+        sampling: options.sampling,
+        confidence,
+    })
+}
+
+/// The return level of period T: the first sampled peak where the estimate falls to 1/T, and where
+/// each end of the band does (by bisection: every one of them falls with the level).
+fn return_level(sample: &StratifiedPeaks, all: &[f64], period: f64, confidence: f64) -> ReturnLevel {
+    let target = 1.0 / period;
+    let crossing = |end: fn(&Estimate) -> f64| {
+        let i = all.partition_point(|&x| end(&sample.exceedance(x, confidence)) > target);
+        all.get(i).copied()
+    };
+    ReturnLevel {
+        return_period_years: period,
+        value: crossing(|e| e.probability),
+        lower: crossing(|e| e.lower),
+        upper: crossing(|e| e.upper),
+    }
+}
+
+fn reliability(limit: f64, e: Estimate) -> Reliability {
+    let beta = |p: f64| -> Option<f64> {
+        (p > 0.0 && p < 1.0).then(|| -Normal::standard().inverse_cdf(p)).filter(|b| b.is_finite())
+    };
+    Reliability {
+        limit,
+        annual_probability: e.probability,
+        lower: e.lower,
+        upper: e.upper,
+        cov: e.cov,
+        beta: beta(e.probability).unwrap_or(if e.probability >= 1.0 { f64::NEG_INFINITY } else { f64::INFINITY }),
+        beta_lower: beta(e.upper),
+        beta_upper: beta(e.lower),
+    }
+}
+
+/// The annual curve of a metamodel's peak `response`; the climate replaces the metamodel's own
+/// wind-speed marginal, every other input keeps its law.
+pub fn metamodel_hazard(
+    metamodel: &Metamodel,
+    problem: &Problem,
+    response: Response,
+    options: &HazardOptions,
+    observer: &dyn Observer,
+) -> Result<HazardCurve> {
+    response.check(problem.structure.floors())?;
+    let calibrated = metamodel.calibrated_range(problem, WIND_SPEED)?;
+    hazard_curve(&problem.inputs, options, calibrated, |rows, first| {
+        let storms: Vec<usize> = (first..first + rows.len()).collect();
+        peaks_at(metamodel, &Draws { problem, rows, storms: &storms, seed: options.seed }, response, observer)
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::uncertainty::Input;
+    use statrs::distribution::Continuous;
+
+    /// peak = v·exp(σ z), z ~ N(0, 1): λ(x) = ∫ Φ(ln(v/x)/σ) f(v) dv, here by Simpson's rule on the
+    /// climate's quantiles (an independent computation).
+    fn lognormal_scatter_annual(climate: &Marginal, sigma: f64, x: f64) -> f64 {
+        let normal = Normal::standard();
+        // Over ξ = Φ⁻¹(F(v)) from −8 to 8, where φ(ξ) dξ = f(v) dv.
+        let n = 4000;
+        let h = 16.0 / n as f64;
+        (0..=n)
+            .map(|i| {
+                let xi = -8.0 + i as f64 * h;
+                let v =
+                    if xi > 0.0 { climate.upper_quantile(normal.cdf(-xi)) } else { climate.quantile(normal.cdf(xi)) };
+                let w = if i == 0 || i == n {
+                    1.0
+                } else if i % 2 == 1 {
+                    4.0
+                } else {
+                    2.0
+                };
+                w * normal.pdf(xi) * normal.cdf((v / x).ln() / sigma)
+            })
+            .sum::<f64>()
+            * h
+            / 3.0
+    }
+
+    fn toy_inputs() -> InputModel {
+        InputModel::new(vec![
+            Input { name: "z".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },
+            Input { name: WIND_SPEED.into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } },
+        ])
+        .unwrap()
+    }
+
+    fn toy_peaks(sigma: f64) -> impl FnMut(&[Vec<f64>], usize) -> Result<Vec<f64>> {
+        move |rows: &[Vec<f64>], _| Ok(rows.iter().map(|r| r[1] * (sigma * r[0]).exp()).collect())
+    }
+
+    /// The stratified annual curve of a response with lognormal scatter about the speed, against
+    /// the quadrature: within four coefficients of variation from 10⁻¹ to 10⁻⁵ a year, each with a
+    /// coefficient of variation below 0.3 from 20 000 storms (equal allocation gave 0.44 at 10⁻⁵,
+    /// Neyman's after a pilot below 0.3); the return levels' bands hold the exact levels.
+    #[test]
+    fn annual_curve_and_return_levels_match_quadrature_down_to_1e_5() {
+        let climate = Marginal::Gumbel { location: 22.0, scale: 2.2 };
+        let sigma = 0.15;
+        let mut options = HazardOptions {
+            climate,
+            samples: 20_000,
+            seed: 11,
+            thresholds: None,
+            return_periods: vec![10.0, 100.0, 1e4, 1e5],
+            limit: None,
+            confidence: 0.95,
+            sampling: Sampling::Stratified,
+        };
+        // The exact level of each probability, by bisection on the quadrature.
+        let level = |p: f64| {
+            let (mut lo, mut hi) = (1.0, 200.0);
+            for _ in 0..60 {
+                let mid = 0.5 * (lo + hi);
+                if lognormal_scatter_annual(&climate, sigma, mid) > p { lo = mid } else { hi = mid }
+            }
+            0.5 * (lo + hi)
+        };
+        let levels: Vec<f64> = [1e-1, 1e-2, 1e-3, 1e-4, 1e-5].iter().map(|&p| level(p)).collect();
+        options.thresholds = Some(levels.clone());
+        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma)).unwrap();
+        for (i, p) in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5].iter().enumerate() {
+            let cov = curve.cov[i].unwrap();
+            assert!(cov < 0.3, "p = {p}: cov {cov}");
+            let relative = curve.annual_probability[i] / p - 1.0;
+            assert!(relative.abs() < 4.0 * cov, "p = {p}: {} (cov {cov})", curve.annual_probability[i]);
+        }
+        for r in &curve.return_levels {
+            let exact = level(1.0 / r.return_period_years);
+            let (lo, hi) = (r.lower.unwrap(), r.upper.unwrap());
+            assert!(
+                lo <= exact * 1.01 && exact <= hi * 1.01,
+                "T = {}: {exact} not in [{lo}, {hi}]",
+                r.return_period_years
+            );
+        }
+        // The rarest level leans on speeds above 45 m/s (the 10⁻⁵ speed is 47.3 m/s); the commonest
+        // does not.
+        let beyond = &curve.probability_beyond_calibrated_range;
+        assert!(beyond[4] > 0.1 * curve.annual_probability[4], "{beyond:?}");
+        assert!(beyond[0] < 0.01 * curve.annual_probability[0], "{beyond:?}");
+        assert!(curve.samples <= 20_000);
+    }
+
+    /// Plain Monte Carlo with the same number of storms agrees with the stratified estimate where
+    /// it can see (10⁻¹, 10⁻²), within the sum of their standard errors times four.
+    #[test]
+    fn plain_monte_carlo_agrees_with_the_stratified_estimate() {
+        let climate = Marginal::Frechet { mean: 30.0, sd: 3.5 };
+        let thresholds = vec![35.0, 45.0];
+        let run = |sampling| {
+            let options = HazardOptions {
+                climate,
+                samples: 40_000,
+                seed: 5,
+                thresholds: Some(thresholds.clone()),
+                return_periods: vec![],
+                limit: Some(45.0),
+                confidence: 0.95,
+                sampling,
+            };
+            hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1)).unwrap()
+        };
+        let (stratified, plain) = (run(Sampling::Stratified), run(Sampling::MonteCarlo));
+        for i in 0..2 {
+            let sd = |c: &HazardCurve| c.cov[i].unwrap() * c.annual_probability[i];
+            let gap = (stratified.annual_probability[i] - plain.annual_probability[i]).abs();
+            assert!(gap < 4.0 * (sd(&stratified) + sd(&plain)), "{i}: {stratified:?} {plain:?}");
+        }
+        let r = plain.reliability.unwrap();
+        assert!((r.beta + Normal::standard().inverse_cdf(r.annual_probability)).abs() < 1e-12);
+        assert!(r.beta_lower.unwrap() < r.beta && r.beta < r.beta_upper.unwrap());
+    }
+
+    #[test]
+    fn bad_options_name_the_field() {
+        let base = HazardOptions {
+            climate: Marginal::Frechet { mean: 30.0, sd: 3.5 },
+            samples: 100,
+            seed: 1,
+            thresholds: None,
+            return_periods: vec![50.0],
+            limit: None,
+            confidence: 0.95,
+            sampling: Sampling::Stratified,
+        };
+        let cases = [
+            ("return_periods", HazardOptions { return_periods: vec![0.5], ..base.clone() }),
+            ("return_periods", HazardOptions { return_periods: vec![f64::NAN], ..base.clone() }),
+            ("limit", HazardOptions { limit: Some(-1.0), ..base.clone() }),
+            ("samples", HazardOptions { samples: 5, ..base.clone() }),
+            ("confidence", HazardOptions { confidence: 1.0, ..base.clone() }),
+        ];
+        for (field, options) in cases {
+            let err = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1)).unwrap_err();
+            assert!(err.to_string().starts_with(field), "{field}: {err}");
+        }
+    }
+}

@@ -1,0 +1,159 @@
+//! `windmeta hazard`: the annual exceedance curve of a peak response under a wind climate, its
+//! return levels and, at a limit, the reliability index.
+
+use super::args::{ResponseArgs, describe, out_format, write_out};
+use super::read_metamodel;
+use super::validate::Counter;
+use crate::analysis::{
+    ClimateSpec, DEFAULT_RETURN_PERIODS, HazardCurve, HazardOptions, Sampling, WIND_SPEED, hazard_svg, metamodel_hazard,
+};
+use crate::error::{Error, Result};
+use clap::{Args, ValueEnum};
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Copy, ValueEnum)]
+pub enum SamplingArg {
+    Stratified,
+    MonteCarlo,
+}
+
+#[derive(Debug, Clone, Args)]
+pub struct HazardArgs {
+    #[arg(long)]
+    pub model: PathBuf,
+    /// The law of the annual maximum storm speed, as JSON: a marginal such as
+    /// '{"distribution": "gumbel", "location": 22, "scale": 2.2}', or
+    /// '{"return_period_speeds": {"50": 32, "700": 40}}'. Default: the metamodel's wind_speed.
+    #[arg(long)]
+    pub climate: Option<String>,
+    #[command(flatten)]
+    pub response: ResponseArgs,
+    /// Thresholds (m), comma separated; 50 spread over the sampled peaks when absent.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub thresholds: Option<Vec<f64>>,
+    /// Return periods (years), comma separated.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub return_periods: Option<Vec<f64>>,
+    /// A limit (m) whose annual probability and reliability index are reported.
+    #[arg(long, allow_negative_numbers = true)]
+    pub limit: Option<f64>,
+    #[arg(long, default_value_t = 20_000)]
+    pub samples: usize,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long, value_enum, default_value = "stratified")]
+    pub sampling: SamplingArg,
+    #[arg(long, default_value_t = 0.95)]
+    pub confidence: f64,
+    /// Print the answer as JSON.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the answer: .csv, .json or .svg by extension.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+pub fn hazard(args: &HazardArgs) -> Result<String> {
+    let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
+    let (metamodel, problem) = read_metamodel(&args.model)?;
+    let climate = match &args.climate {
+        Some(text) => serde_json::from_str::<ClimateSpec>(text)
+            .map_err(|e| Error::invalid("climate", e.to_string()))?
+            .resolve("climate")?,
+        None => *problem.inputs.marginal(WIND_SPEED)?,
+    };
+    let options = HazardOptions {
+        climate,
+        samples: args.samples,
+        seed: args.seed,
+        thresholds: args.thresholds.clone(),
+        return_periods: args.return_periods.clone().unwrap_or_else(|| DEFAULT_RETURN_PERIODS.to_vec()),
+        limit: args.limit,
+        confidence: args.confidence,
+        sampling: match args.sampling {
+            SamplingArg::Stratified => Sampling::Stratified,
+            SamplingArg::MonteCarlo => Sampling::MonteCarlo,
+        },
+    };
+    let response = args.response.response(&problem);
+    let started = Instant::now();
+    let curve = metamodel_hazard(&metamodel, &problem, response, &options, &Counter(started))?;
+    let seconds = started.elapsed().as_secs_f64();
+    let what = describe(response);
+    if let (Some(path), Some(format)) = (&args.out, format) {
+        let text = match format.as_str() {
+            "csv" => csv_text(&curve),
+            "json" => serde_json::to_string_pretty(&curve).expect("plain JSON"),
+            _ => hazard_svg(&curve, &format!("peak {what} x (m)")),
+        };
+        write_out(path, &text)?;
+    }
+    if args.json {
+        return Ok(serde_json::to_string_pretty(&curve).expect("plain JSON"));
+    }
+    Ok(table(&curve, &what, seconds))
+}
+
+fn csv_text(curve: &HazardCurve) -> String {
+    let mut out = String::from("threshold_m,annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range\n");
+    let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
+    for i in 0..curve.thresholds.len() {
+        out += &format!(
+            "{},{},{},{},{},{},{}\n",
+            curve.thresholds[i],
+            curve.annual_probability[i],
+            curve.lower[i],
+            curve.upper[i],
+            blank(curve.cov[i]),
+            blank(curve.mri_years[i]),
+            curve.probability_beyond_calibrated_range[i]
+        );
+    }
+    out
+}
+
+fn table(curve: &HazardCurve, what: &str, seconds: f64) -> String {
+    let number = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.5}"));
+    let mut out = format!(
+        "annual peak {what}: {} storms in {} strata ({:?}) in {seconds:.2} s\n",
+        curve.samples, curve.strata, curve.sampling
+    );
+    out += &format!(
+        "{:>10}  {:>10}  {:>10}  {:>10}  {:>6}  {:>10}\n",
+        "x (m)", "P/year", "lower", "upper", "cov", "MRI (y)"
+    );
+    let step = (curve.thresholds.len() / 12).max(1);
+    for i in (0..curve.thresholds.len()).step_by(step) {
+        out += &format!(
+            "{:>10.5}  {:>10.3e}  {:>10.3e}  {:>10.3e}  {:>6}  {:>10}\n",
+            curve.thresholds[i],
+            curve.annual_probability[i],
+            curve.lower[i],
+            curve.upper[i],
+            curve.cov[i].map_or("-".into(), |c| format!("{c:.3}")),
+            curve.mri_years[i].map_or("-".into(), |t| format!("{t:.4}")),
+        );
+    }
+    out += &format!("{:>10}  {:>10}  {:>10}  {:>10}\n", "T (years)", "x_T (m)", "lower", "upper");
+    for r in &curve.return_levels {
+        out += &format!(
+            "{:>10}  {:>10}  {:>10}  {:>10}\n",
+            r.return_period_years,
+            number(r.value),
+            number(r.lower),
+            number(r.upper)
+        );
+    }
+    if let Some(r) = &curve.reliability {
+        out += &format!(
+            "limit {} m: P = {:.3e} per year [{:.3e}, {:.3e}], β = {:.3}\n",
+            r.limit, r.annual_probability, r.lower, r.upper, r.beta
+        );
+    }
+    out += &format!(
+        "calibrated wind speeds {:.1}-{:.1} m/s; the climate's probability outside them {:.2e}\n",
+        curve.calibrated_wind_range[0], curve.calibrated_wind_range[1], curve.climate_beyond_calibrated_range
+    );
+    out
+}
