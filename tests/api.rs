@@ -88,6 +88,70 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(done["kind"], "exceedance");
     assert_eq!(done["result"]["probabilities"], curve["probabilities"], "the operation's curve is the same");
 
+    // The annual curve under a Gumbel climate through two return-period speeds, its CSV (one row
+    // per threshold, the same numbers), its figure, and the same request as an operation.
+    let hazard = format!("/v1/metamodels/{id}/hazard");
+    // (A narrow climate: this small metamodel's design spans about 24 to 40 m/s, and its expansions
+    // are not to be trusted far beyond.)
+    let mut body = json!({"samples": 120, "seed": 4, "climate": {"return_period_speeds": {"50": 31, "700": 33}},
+                          "return_periods": [10, 100]});
+    let (status, annual) = app.post_json(&hazard, body.clone()).await;
+    assert_eq!(status, 200, "{annual}");
+    // A limit inside the curve: its probability and β = −Φ⁻¹(P).
+    body["limit"] = annual["thresholds"][25].clone();
+    let (status, annual) = app.post_json(&hazard, body.clone()).await;
+    assert_eq!(status, 200, "{annual}");
+    for key in [
+        "thresholds",
+        "annual_probability",
+        "lower",
+        "upper",
+        "cov",
+        "mri_years",
+        "probability_beyond_calibrated_range",
+    ] {
+        assert_eq!(annual[key].as_array().map(Vec::len), Some(50), "{key}: {annual}");
+    }
+    assert_eq!(annual["climate"]["distribution"], "gumbel");
+    assert_eq!(annual["return_levels"].as_array().unwrap().len(), 2);
+    let beta = annual["reliability"]["beta"].as_f64().unwrap();
+    assert!(beta.is_finite(), "{annual}");
+    let csv = app.client.post(format!("{}{hazard}", app.address)).header("accept", "text/csv").json(&body).send();
+    let csv = csv.await.unwrap().text().await.unwrap();
+    let rows: Vec<&str> = csv.lines().skip(1).collect();
+    assert_eq!(rows.len(), 50);
+    let first: f64 = rows[0].split(',').nth(1).unwrap().parse().unwrap();
+    assert_eq!(first, annual["annual_probability"][0].as_f64().unwrap());
+    let svg = app.client.post(format!("{}{hazard}", app.address)).header("accept", "image/svg+xml").json(&body).send();
+    assert!(svg.await.unwrap().text().await.unwrap().starts_with("<svg"));
+    let queued = app.client.post(format!("{}{hazard}", app.address)).header("prefer", "respond-async").json(&body);
+    let queued: Value = queued.send().await.unwrap().json().await.unwrap();
+    let done = app.wait_for(queued["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(60)).await;
+    assert_eq!(done["kind"], "hazard");
+    assert_eq!(
+        done["result"]["annual_probability"], annual["annual_probability"],
+        "the operation's answer is the same"
+    );
+    let (s, ct, body) = problem(app.post(&hazard, json!({"return_periods": [0.5]})).await).await;
+    assert_problem(s, &ct, &body, 422, "return_periods");
+    let (s, ct, body) =
+        problem(app.post(&hazard, json!({"climate": {"distribution": "gumbel", "location": 100, "scale": 30}})).await)
+            .await;
+    assert_problem(s, &ct, &body, 422, "climate");
+
+    let (status, fragility) = app
+        .post_json(
+            &format!("/v1/metamodels/{id}/fragility"),
+            json!({"wind_speeds": [28, 30, 32], "thresholds": [0.01, 0.02], "samples": 12, "seed": 2}),
+        )
+        .await;
+    assert_eq!(status, 200, "{fragility}");
+    assert_eq!(fragility["curves"].as_array().unwrap().len(), 2);
+    assert_eq!(fragility["curves"][0]["probability"].as_array().unwrap().len(), 3);
+    let (s, ct, body) =
+        problem(app.post(&format!("/v1/metamodels/{id}/fragility"), json!({"samples": 10})).await).await;
+    assert_problem(s, &ct, &body, 422, "thresholds");
+
     // A validation job against the reference on fresh samples.
     let response = app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 4, "seed": 9})).await;
     assert_eq!(response.status().as_u16(), 202);
@@ -327,6 +391,11 @@ async fn provoke(app: &TestApp, ids: &Ids, method: &str, template: &str, status:
         "/v1/calibrations" => json!({"experiments": 4, "duration_s": 10}),
         "/v1/metamodels/{id}/exceedance" => json!({"samples": 10}),
         "/v1/metamodels/{id}/validations" => json!({"samples": 2}),
+        "/v1/metamodels/{id}/hazard" => {
+            json!({"samples": 60, "return_periods": [2], "climate": {"return_period_speeds": {"2": 29, "50": 31}}})
+        }
+        "/v1/metamodels/{id}/fragility" => json!({"thresholds": [0.01], "wind_speeds": [29, 31], "samples": 10}),
+        "/v1/metamodels/{id}/sensitivity" => json!({"samples": 10, "seed": 2}),
         _ => json!({}),
     };
     let invalid_body = match template {
@@ -346,7 +415,9 @@ async fn provoke(app: &TestApp, ids: &Ids, method: &str, template: &str, status:
         415 => request("").header("content-type", "text/plain").body(valid_body.to_string()),
         422 if has_body => request("").json(&invalid_body),
         422 => request("?limit=0"),
-        202 | 500 | 503 if template.ends_with("/exceedance") => {
+        202 | 500 | 503
+            if ["/exceedance", "/hazard", "/fragility", "/sensitivity"].iter().any(|e| template.ends_with(e)) =>
+        {
             request("").header("prefer", "respond-async").json(&valid_body)
         }
         _ if has_body => request("").json(&valid_body),

@@ -167,7 +167,22 @@ fn custom_structure_runs() {
 /// consistent with the rows they come from (not their values: speed is never asserted in a test).
 #[test]
 fn bench_reports_rows_and_headline_figures() {
-    let args = ["bench", "--duration", "60", "--experiments", "24", "--samples", "16", "--repetitions", "1", "--json"];
+    let args = [
+        "bench",
+        "--duration",
+        "60",
+        "--experiments",
+        "24",
+        "--samples",
+        "16",
+        "--hazard-samples",
+        "400",
+        "--sensitivity-samples",
+        "16",
+        "--repetitions",
+        "1",
+        "--json",
+    ];
     let report = json(&args);
     let rows = report["rows"].as_array().unwrap();
     let stage = |prefix: &str| -> f64 {
@@ -182,5 +197,7 @@ fn bench_reports_rows_and_headline_figures() {
     assert!((ratio - reduced / metamodel).abs() <= 1e-9 * ratio);
     assert_eq!(report["calibration_seconds"].as_f64().unwrap(), stage("calibration, K = 24"));
     assert_eq!(report["exceedance_10k_seconds"].as_f64().unwrap(), stage("exceedance curve, 16 samples"));
+    assert!(stage("hazard curve, 400 storms, 10 return periods") > 0.0);
+    assert!(stage("Sobol indices, N = 16") > 0.0);
     refused(&["bench", "--preset", "frame41"], "unknown preset");
 }

@@ -91,7 +91,8 @@ pub struct Reliability {
     pub lower: f64,
     pub upper: f64,
     pub cov: Option<f64>,
-    pub beta: f64,
+    /// None where the probability is 0 or 1 (β infinite).
+    pub beta: Option<f64>,
     /// β at the band's ends (the upper probability gives the lower β); none where infinite.
     pub beta_lower: Option<f64>,
     pub beta_upper: Option<f64>,
@@ -129,6 +130,28 @@ pub struct HazardCurve {
     pub strata: usize,
     pub sampling: Sampling,
     pub confidence: f64,
+}
+
+impl HazardCurve {
+    /// The curve as CSV, one row per threshold (empty where a value is undefined).
+    pub fn csv(&self) -> String {
+        let mut out =
+            String::from("threshold_m,annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range\n");
+        let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
+        for i in 0..self.thresholds.len() {
+            out += &format!(
+                "{},{},{},{},{},{},{}\n",
+                self.thresholds[i],
+                self.annual_probability[i],
+                self.lower[i],
+                self.upper[i],
+                blank(self.cov[i]),
+                blank(self.mri_years[i]),
+                self.probability_beyond_calibrated_range[i]
+            );
+        }
+        out
+    }
 }
 
 /// The annual curve of the peaks that `peaks_of(rows, first)` returns for input rows drawn from
@@ -239,7 +262,7 @@ fn reliability(limit: f64, e: Estimate) -> Reliability {
         lower: e.lower,
         upper: e.upper,
         cov: e.cov,
-        beta: beta(e.probability).unwrap_or(if e.probability >= 1.0 { f64::NEG_INFINITY } else { f64::INFINITY }),
+        beta: beta(e.probability),
         beta_lower: beta(e.upper),
         beta_upper: beta(e.lower),
     }
@@ -271,27 +294,10 @@ mod tests {
     /// peak = v·exp(σ z), z ~ N(0, 1): λ(x) = ∫ Φ(ln(v/x)/σ) f(v) dv, here by Simpson's rule on the
     /// climate's quantiles (an independent computation).
     fn lognormal_scatter_annual(climate: &Marginal, sigma: f64, x: f64) -> f64 {
-        let normal = Normal::standard();
         // Over ξ = Φ⁻¹(F(v)) from −8 to 8, where φ(ξ) dξ = f(v) dv.
-        let n = 4000;
-        let h = 16.0 / n as f64;
-        (0..=n)
-            .map(|i| {
-                let xi = -8.0 + i as f64 * h;
-                let v =
-                    if xi > 0.0 { climate.upper_quantile(normal.cdf(-xi)) } else { climate.quantile(normal.cdf(xi)) };
-                let w = if i == 0 || i == n {
-                    1.0
-                } else if i % 2 == 1 {
-                    4.0
-                } else {
-                    2.0
-                };
-                w * normal.pdf(xi) * normal.cdf((v / x).ln() / sigma)
-            })
-            .sum::<f64>()
-            * h
-            / 3.0
+        let normal = Normal::standard();
+        let integrand = |xi: f64| normal.pdf(xi) * normal.cdf((climate.from_standard(xi) / x).ln() / sigma);
+        crate::uncertainty::simpson(integrand, -8.0, 8.0, 4000)
     }
 
     fn toy_inputs() -> InputModel {
@@ -385,8 +391,9 @@ mod tests {
             assert!(gap < 4.0 * (sd(&stratified) + sd(&plain)), "{i}: {stratified:?} {plain:?}");
         }
         let r = plain.reliability.unwrap();
-        assert!((r.beta + Normal::standard().inverse_cdf(r.annual_probability)).abs() < 1e-12);
-        assert!(r.beta_lower.unwrap() < r.beta && r.beta < r.beta_upper.unwrap());
+        let beta = r.beta.unwrap();
+        assert!((beta + Normal::standard().inverse_cdf(r.annual_probability)).abs() < 1e-12);
+        assert!(r.beta_lower.unwrap() < beta && beta < r.beta_upper.unwrap());
     }
 
     #[test]

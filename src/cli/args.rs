@@ -77,6 +77,19 @@ impl ResponseArgs {
     }
 }
 
+/// The seed, the band's level and the output of an analysis command.
+#[derive(Debug, Clone, Args)]
+pub struct AnalysisArgs {
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Confidence level of the bands and intervals.
+    #[arg(long, default_value_t = 0.95)]
+    pub confidence: f64,
+    /// Print the answer as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
 /// A human name of a response, for tables and axes.
 pub fn describe(response: Response) -> String {
     match response {
@@ -97,4 +110,21 @@ pub fn out_format(out: Option<&std::path::Path>, allowed: &[&str]) -> Result<Opt
 /// Writes an output file, naming it in the error.
 pub fn write_out(path: &std::path::Path, text: &str) -> Result<()> {
     std::fs::write(path, text).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))
+}
+
+/// A command's answer: written to `--out` in its format (JSON, or what `render` makes of the
+/// other formats), printed as JSON with `--json`, else as `table`.
+pub fn answer<T: serde::Serialize>(
+    value: &T,
+    json: bool,
+    out: Option<(&std::path::Path, String)>,
+    render: impl FnOnce(&str) -> String,
+    table: impl FnOnce() -> String,
+) -> Result<String> {
+    let as_json = || serde_json::to_string_pretty(value).expect("plain JSON");
+    if let Some((path, format)) = out {
+        let text = if format == "json" { as_json() } else { render(&format) };
+        write_out(path, &text)?;
+    }
+    Ok(if json { as_json() } else { table() })
 }

@@ -1,9 +1,12 @@
 //! `windmeta bench`: the method's costs side by side, measured in one run so that their ratios are
 //! honest: a full calibration and its stages, the per-sample stages of one full-size storm (wind by
 //! both paths, both reference integrators, the metamodel's free run on the same storm), and an
-//! exceedance curve end to end. Speed is measured here and in `benches/`, never asserted in a test.
+//! exceedance curve, an annual curve with ten return levels and Sobol indices end to end. Speed is measured here and in `benches/`, never asserted in a test.
 
-use crate::analysis::{Response, automatic_thresholds, exceedance_curve, metamodel_peaks};
+use crate::analysis::{
+    HazardOptions, Response, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve, metamodel_hazard,
+    metamodel_peaks, metamodel_sensitivity,
+};
 use crate::cancel::Never;
 use crate::dynamics::{integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
@@ -32,6 +35,12 @@ pub struct BenchArgs {
     /// Samples of the exceedance curve.
     #[arg(long, default_value_t = 10_000)]
     pub samples: usize,
+    /// Storms of the annual (hazard) curve, with the ten default-like return periods.
+    #[arg(long, default_value_t = 20_000)]
+    pub hazard_samples: usize,
+    /// Rows N of the Sobol analysis (N·(groups + 2) storms).
+    #[arg(long, default_value_t = 4096)]
+    pub sensitivity_samples: usize,
     #[arg(long)]
     pub json: bool,
 }
@@ -63,6 +72,9 @@ pub struct BenchReport {
     /// The calibration end to end, on all threads.
     pub calibration_seconds: f64,
 }
+
+/// The return periods (years) of the benchmarked hazard answer.
+const BENCH_RETURN_PERIODS: [f64; 10] = [2.0, 5.0, 10.0, 50.0, 100.0, 500.0, 700.0, 1000.0, 10000.0, 100000.0];
 
 fn median(mut values: Vec<f64>) -> f64 {
     values.sort_by(f64::total_cmp);
@@ -108,6 +120,34 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     rows.push(row(
         format!("exceedance curve, {} samples, end to end (all threads)", args.samples),
         exceedance,
+        repetitions.min(3),
+    ));
+    let hazard = HazardOptions {
+        climate: *problem.inputs.marginal(WIND_SPEED)?,
+        samples: args.hazard_samples,
+        seed: 1,
+        thresholds: None,
+        return_periods: BENCH_RETURN_PERIODS.to_vec(),
+        limit: None,
+        confidence: 0.95,
+        sampling: Sampling::Stratified,
+    };
+    let hazard_seconds = time(repetitions.min(3), |_| metamodel_hazard(&metamodel, &problem, roof, &hazard, &Silent))?;
+    rows.push(row(
+        format!(
+            "hazard curve, {} storms, {} return periods (all threads)",
+            args.hazard_samples,
+            BENCH_RETURN_PERIODS.len()
+        ),
+        hazard_seconds,
+        repetitions.min(3),
+    ));
+    let n = args.sensitivity_samples;
+    let sobol =
+        time(repetitions.min(3), |r| metamodel_sensitivity(&metamodel, &problem, roof, n, 1 + r, 0.95, &Silent))?;
+    rows.push(row(
+        format!("Sobol indices, N = {n}, with bootstrap intervals (all threads)"),
+        sobol,
         repetitions.min(3),
     ));
     Ok(BenchReport {

@@ -1,6 +1,6 @@
 //! `windmeta fragility`: P(peak > x | v) over a grid of storm speeds, with lognormal fits.
 
-use super::args::{ResponseArgs, describe, out_format, write_out};
+use super::args::{AnalysisArgs, ResponseArgs, answer, describe, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{Fragility, FragilityOptions, MAX_WIND_SPEEDS, fragility_svg, metamodel_fragility};
@@ -24,12 +24,8 @@ pub struct FragilityArgs {
     /// Storms at each speed.
     #[arg(long, default_value_t = 500)]
     pub samples: usize,
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    #[arg(long, default_value_t = 0.95)]
-    pub confidence: f64,
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub analysis: AnalysisArgs,
     /// Write the answer: .json or .svg by extension.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -63,25 +59,17 @@ pub fn fragility(args: &FragilityArgs) -> Result<String> {
         wind_speeds: parse_speeds(&args.wind_speeds)?,
         thresholds: args.thresholds.clone(),
         samples_per_speed: args.samples,
-        seed: args.seed,
-        confidence: args.confidence,
+        seed: args.analysis.seed,
+        confidence: args.analysis.confidence,
     };
     let response = args.response.response(&problem);
     let started = Instant::now();
     let result = metamodel_fragility(&metamodel, &problem, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = describe(response);
-    if let (Some(path), Some(format)) = (&args.out, format) {
-        let text = match format.as_str() {
-            "json" => serde_json::to_string_pretty(&result).expect("plain JSON"),
-            _ => fragility_svg(&result, &format!("peak {what}")),
-        };
-        write_out(path, &text)?;
-    }
-    if args.json {
-        return Ok(serde_json::to_string_pretty(&result).expect("plain JSON"));
-    }
-    Ok(table(&result, &what, seconds))
+    let out = args.out.as_deref().zip(format);
+    let render = |_: &str| fragility_svg(&result, &format!("peak {what}"));
+    answer(&result, args.analysis.json, out, render, || table(&result, &what, seconds))
 }
 
 fn table(result: &Fragility, what: &str, seconds: f64) -> String {

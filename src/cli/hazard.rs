@@ -1,7 +1,7 @@
 //! `windmeta hazard`: the annual exceedance curve of a peak response under a wind climate, its
 //! return levels and, at a limit, the reliability index.
 
-use super::args::{ResponseArgs, describe, out_format, write_out};
+use super::args::{AnalysisArgs, ResponseArgs, answer, describe, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
@@ -40,15 +40,10 @@ pub struct HazardArgs {
     pub limit: Option<f64>,
     #[arg(long, default_value_t = 20_000)]
     pub samples: usize,
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
     #[arg(long, value_enum, default_value = "stratified")]
     pub sampling: SamplingArg,
-    #[arg(long, default_value_t = 0.95)]
-    pub confidence: f64,
-    /// Print the answer as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub analysis: AnalysisArgs,
     /// Write the answer: .csv, .json or .svg by extension.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -66,11 +61,11 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
     let options = HazardOptions {
         climate,
         samples: args.samples,
-        seed: args.seed,
+        seed: args.analysis.seed,
         thresholds: args.thresholds.clone(),
         return_periods: args.return_periods.clone().unwrap_or_else(|| DEFAULT_RETURN_PERIODS.to_vec()),
         limit: args.limit,
-        confidence: args.confidence,
+        confidence: args.analysis.confidence,
         sampling: match args.sampling {
             SamplingArg::Stratified => Sampling::Stratified,
             SamplingArg::MonteCarlo => Sampling::MonteCarlo,
@@ -81,36 +76,11 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
     let curve = metamodel_hazard(&metamodel, &problem, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = describe(response);
-    if let (Some(path), Some(format)) = (&args.out, format) {
-        let text = match format.as_str() {
-            "csv" => csv_text(&curve),
-            "json" => serde_json::to_string_pretty(&curve).expect("plain JSON"),
-            _ => hazard_svg(&curve, &format!("peak {what} x (m)")),
-        };
-        write_out(path, &text)?;
-    }
-    if args.json {
-        return Ok(serde_json::to_string_pretty(&curve).expect("plain JSON"));
-    }
-    Ok(table(&curve, &what, seconds))
-}
-
-fn csv_text(curve: &HazardCurve) -> String {
-    let mut out = String::from("threshold_m,annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range\n");
-    let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
-    for i in 0..curve.thresholds.len() {
-        out += &format!(
-            "{},{},{},{},{},{},{}\n",
-            curve.thresholds[i],
-            curve.annual_probability[i],
-            curve.lower[i],
-            curve.upper[i],
-            blank(curve.cov[i]),
-            blank(curve.mri_years[i]),
-            curve.probability_beyond_calibrated_range[i]
-        );
-    }
-    out
+    let out = args.out.as_deref().zip(format);
+    let render = |format: &str| {
+        if format == "csv" { curve.csv() } else { hazard_svg(&curve, &format!("peak {what} x (m)")) }
+    };
+    answer(&curve, args.analysis.json, out, render, || table(&curve, &what, seconds))
 }
 
 fn table(curve: &HazardCurve, what: &str, seconds: f64) -> String {
@@ -147,8 +117,12 @@ fn table(curve: &HazardCurve, what: &str, seconds: f64) -> String {
     }
     if let Some(r) = &curve.reliability {
         out += &format!(
-            "limit {} m: P = {:.3e} per year [{:.3e}, {:.3e}], β = {:.3}\n",
-            r.limit, r.annual_probability, r.lower, r.upper, r.beta
+            "limit {} m: P = {:.3e} per year [{:.3e}, {:.3e}], β = {}\n",
+            r.limit,
+            r.annual_probability,
+            r.lower,
+            r.upper,
+            r.beta.map_or("-".into(), |b| format!("{b:.3}"))
         );
     }
     out += &format!(

@@ -1,6 +1,6 @@
 //! `windmeta sensitivity`: Sobol indices of a peak response for every input and the storm.
 
-use super::args::{ResponseArgs, describe};
+use super::args::{AnalysisArgs, ResponseArgs, describe};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::metamodel_sensitivity;
@@ -18,12 +18,8 @@ pub struct SensitivityArgs {
     /// Rows N of each of the two base samples; the analysis runs N·(groups + 2) storms.
     #[arg(long, default_value_t = 4096)]
     pub samples: usize,
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    #[arg(long, default_value_t = 0.95)]
-    pub confidence: f64,
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub analysis: AnalysisArgs,
 }
 
 pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
@@ -35,12 +31,12 @@ pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
         &problem,
         response,
         args.samples,
-        args.seed,
-        args.confidence,
+        args.analysis.seed,
+        args.analysis.confidence,
         &Counter(started),
     )?;
     let seconds = started.elapsed().as_secs_f64();
-    if args.json {
+    if args.analysis.json {
         return Ok(serde_json::to_string_pretty(&result).expect("plain JSON"));
     }
     let mut out = format!(

@@ -35,6 +35,10 @@ pub struct ServeArgs {
     /// Most samples an exceedance request may ask for.
     #[arg(long, env = "WINDMETA_MAX_SAMPLES", default_value_t = 20_000)]
     pub max_samples: usize,
+    /// Most metamodel storms one hazard, fragility or sensitivity request may run (about 35 s of
+    /// two cores at full size for 100 000).
+    #[arg(long, env = "WINDMETA_MAX_ANALYSIS_STORMS", default_value_t = 100_000)]
+    pub max_analysis_storms: usize,
     /// Exceedance requests up to this many samples are answered at once; larger ones (and any
     /// with `Prefer: respond-async`) run as operations.
     #[arg(long, env = "WINDMETA_MAX_SYNC_SAMPLES", default_value_t = 2_000)]
@@ -116,6 +120,7 @@ impl ServeArgs {
         for (field, value) in [
             ("max_body_bytes", self.max_body_bytes),
             ("max_samples", self.max_samples),
+            ("max_analysis_storms", self.max_analysis_storms),
             ("max_queued_jobs", self.max_queued_jobs),
             ("max_experiments", self.max_experiments),
             ("max_event_streams", self.max_event_streams),

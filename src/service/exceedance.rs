@@ -30,6 +30,15 @@ pub enum ResponseKind {
     Drift,
 }
 
+/// The response a request names: its kind at `floor`, the roof when absent.
+pub fn response_of(floor: Option<usize>, kind: ResponseKind, problem: &Problem) -> Response {
+    let floor = floor.unwrap_or(problem.structure.floors());
+    match kind {
+        ResponseKind::Displacement => Response::Displacement { floor },
+        ResponseKind::Drift => Response::Drift { floor },
+    }
+}
+
 /// `POST /v1/metamodels/{id}/exceedance`: every field optional.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(default, deny_unknown_fields)]
@@ -102,11 +111,7 @@ impl ExceedanceRequest {
         metamodel_id: &str,
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
-        let floor = self.floor.unwrap_or(problem.structure.floors());
-        let response = match self.response {
-            ResponseKind::Displacement => Response::Displacement { floor },
-            ResponseKind::Drift => Response::Drift { floor },
-        };
+        let response = response_of(self.floor, self.response, problem);
         let mut inputs = problem.inputs.clone();
         for (name, value) in &self.fixed {
             let speed = if name == "wind_speed" { WindLoads::check_speed(*value) } else { Ok(()) };

@@ -8,11 +8,12 @@
 //! assembles the metamodel when every chunk is done. Idle workers of any replica take tasks before
 //! new jobs. Validations and exceedance requests run whole on the worker that claimed them.
 
-use super::exceedance::{ExceedanceAnswer, ExceedanceJob};
+use super::analyses::AnalysisJob;
+use super::exceedance::ExceedanceJob;
 use super::lease::LeaseKeeper;
 use super::store::{Store, TaskRow};
 use super::{AppState, CalibrationRequest, ValidationJob};
-use crate::analysis::{ValidationReport, validate};
+use crate::analysis::validate;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::phases::{CalibrationPlan, ExperimentFit, assemble, fit_experiments, plan};
@@ -163,8 +164,8 @@ fn task_failure(error: &Error) -> String {
 /// What a job produced.
 enum JobOutput {
     Metamodel(Box<Metamodel>),
-    Report(Box<ValidationReport>),
-    Curve(Box<ExceedanceAnswer>),
+    /// A validation report or a sampling request's answer, as JSON.
+    Answer(String),
 }
 
 type WorkFuture = Pin<Box<dyn Future<Output = Result<(JobOutput, String)>> + Send>>;
@@ -216,7 +217,7 @@ async fn prepare(
             let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
                 let report = validate(&metamodel, &problem, job.samples, job.seed, supervision.as_ref())?;
-                Ok((JobOutput::Report(Box::new(report)), problem.name))
+                Ok((JobOutput::Answer(serde_json::to_string(&report).expect("a report serialises")), problem.name))
             })))
         }
         "exceedance" => {
@@ -224,7 +225,15 @@ async fn prepare(
             let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
                 let answer = job.request.answer(&metamodel, &problem, &job.metamodel_id, supervision.as_ref())?;
-                Ok((JobOutput::Curve(Box::new(answer)), problem.name))
+                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("a curve serialises")), problem.name))
+            })))
+        }
+        "hazard" | "fragility" | "sensitivity" => {
+            let job: AnalysisJob = parse(request)?;
+            let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            Ok(Box::pin(blocking(move || {
+                let answer = job.request.answer(&metamodel, &problem, &job.metamodel_id, supervision.as_ref())?;
+                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")), problem.name))
             })))
         }
         other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
@@ -368,13 +377,8 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
             let body = serde_json::to_string(&metamodel).expect("a metamodel serialises");
             lease.persist("a metamodel", || store.complete(&id, owner, &metamodel_id, &preset, &body)).await.map(|_| ())
         }
-        Ok((JobOutput::Report(report), _)) => {
-            let body = serde_json::to_string(&report).expect("a report serialises");
-            lease.persist("a report", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
-        }
-        Ok((JobOutput::Curve(curve), _)) => {
-            let body = serde_json::to_string(&curve).expect("a curve serialises");
-            lease.persist("a curve", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
+        Ok((JobOutput::Answer(body), _)) => {
+            lease.persist("an answer", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
         }
         Err(Error::Cancelled) if state.draining.load(Ordering::Relaxed) => {
             lease.persist("releasing a job", || store.release(&id, owner)).await

@@ -1,6 +1,7 @@
 //! The HTTP service (axum on tokio): calibration jobs run by workers off the async runtime, stored
 //! metamodels, exceedance requests. The only module with tokio, axum and sqlx.
 
+mod analyses;
 mod cache;
 mod config;
 mod error;

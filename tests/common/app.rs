@@ -102,6 +102,12 @@ impl TestApp {
         r
     }
 
+    /// POST with a JSON answer: its status and body.
+    pub async fn post_json(&self, path: &str, body: Value) -> (u16, Value) {
+        let r = self.post(path, body).await;
+        (r.status().as_u16(), r.json().await.unwrap_or(Value::Null))
+    }
+
     pub async fn wait_for(&self, id: &str, states: &[&str], limit: Duration) -> Value {
         let started = Instant::now();
         loop {

@@ -1,11 +1,10 @@
 //! Stored metamodels, and the exceedance curves sampled from them.
 
+use super::sampling::{Queued, Work, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
 use crate::problem::Problem;
 use crate::service::error::{ApiError, ProblemDetails};
-use crate::service::exceedance::{
-    ExceedanceAnswer, ExceedanceJob, ExceedanceRequest, Rendering, RequestWatch, StopOnDrop,
-};
+use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
 use crate::service::routes::operations::{Operation, OperationKind};
 use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
 use crate::surrogate::Metamodel;
@@ -15,13 +14,9 @@ use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response as HttpResponse};
 use serde::Serialize;
 use std::sync::Arc;
-use std::time::Duration;
 use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
-
-/// Seconds a client should wait before offering a synchronous request again.
-const BUSY_RETRY_S: u64 = 1;
 
 pub fn router() -> OpenApiRouter<AppState> {
     OpenApiRouter::new()
@@ -122,15 +117,6 @@ pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, 
     Ok(loaded)
 }
 
-/// Whether the client asked for the answer as an operation (RFC 7240 `Prefer: respond-async`).
-fn prefers_async(headers: &HeaderMap) -> bool {
-    headers
-        .get_all("prefer")
-        .iter()
-        .filter_map(|v| v.to_str().ok())
-        .any(|v| v.split(',').any(|p| p.trim().eq_ignore_ascii_case("respond-async")))
-}
-
 /// The peak-response exceedance curve with its band, sampled from the metamodel: JSON, CSV or SVG
 /// by `Accept`. Requests above the server's synchronous limit (or with `Prefer: respond-async`)
 /// run as an operation whose `result` is the JSON curve.
@@ -162,53 +148,19 @@ async fn exceedance_curve(
 ) -> Result<HttpResponse, ApiError> {
     request.check(&state.config)?;
     let loaded = load(&state, &id).await?;
-    if request.samples > state.config.max_sync_samples || prefers_async(&headers) {
-        let job = ExceedanceJob { metamodel_id: id, request };
-        let text = serde_json::to_string(&job).expect("a job serialises");
-        return accept_job(&state, &headers, "exceedance", OperationKind::Exceedance, text).await;
-    }
-    let slots = state.config.sync_request_slots();
-    let permit = state.sampling.clone().try_acquire_owned().map_err(|_| {
-        ApiError::unavailable(
-            format!("{slots} exceedance requests are being sampled; retry, or send `Prefer: respond-async`"),
-            BUSY_RETRY_S,
-        )
-    })?;
-    let accept = headers.get(header::ACCEPT).and_then(|v| v.to_str().ok()).unwrap_or("application/json");
-    let rendering = Rendering::from_accept(accept);
-    let watch = Arc::new(RequestWatch::new(state.draining.clone()));
-    let _stop_when_the_client_leaves = StopOnDrop(watch.clone());
-    let work = {
-        let watch = watch.clone();
-        tokio::task::spawn_blocking(move || {
-            // Held until the sampling has stopped, whatever became of the request.
-            let _permit = permit;
-            let (metamodel, problem) = loaded.as_ref();
-            let answer = request.answer(metamodel, problem, &id, watch.as_ref())?;
-            Ok::<_, crate::error::Error>(rendering.render(&answer))
-        })
-    };
-    let timeout = Duration::from_secs(state.config.sync_timeout_s);
-    let (content_type, body) = match tokio::time::timeout(timeout, work).await {
-        Ok(joined) => match joined.map_err(ApiError::internal)? {
-            Ok(rendered) => rendered,
-            Err(crate::error::Error::Cancelled) => {
-                return Err(ApiError::unavailable("the server is shutting down", BUSY_RETRY_S));
-            }
-            Err(error) => return Err(error.into()),
-        },
-        Err(_) => {
-            watch.stop();
-            return Err(ApiError::unavailable(
-                format!(
-                    "not answered within {} s; ask for fewer samples or send `Prefer: respond-async`",
-                    timeout.as_secs()
-                ),
-                BUSY_RETRY_S,
-            ));
+    let storms = request.samples;
+    let queued = {
+        let (id, request) = (id.clone(), request.clone());
+        move || Queued {
+            endpoint: "exceedance",
+            kind: OperationKind::Exceedance,
+            job: serde_json::to_string(&ExceedanceJob { metamodel_id: id, request }).expect("a job serialises"),
         }
     };
-    Ok(([(header::CONTENT_TYPE, content_type)], body).into_response())
+    let work: Work = Box::new(move |metamodel, problem, observer, rendering| {
+        Ok(rendering.render(&request.answer(metamodel, problem, &id, observer)?))
+    });
+    answer_or_queue(&state, &headers, loaded, storms, queued, work).await
 }
 
 /// Validates the metamodel against the reference model on fresh samples, as an operation whose

@@ -1,5 +1,6 @@
 //! The routes, one router per resource, merged here with the layers every request passes.
 
+mod analyses;
 mod auth;
 mod calibrations;
 mod health;
@@ -7,6 +8,7 @@ pub mod metamodels;
 mod openapi;
 pub mod operations;
 mod presets;
+mod sampling;
 mod telemetry;
 
 pub use auth::ApiKeys;
@@ -37,6 +39,7 @@ fn documented() -> OpenApiRouter<AppState> {
         .merge(calibrations::router())
         .merge(operations::router())
         .merge(metamodels::router())
+        .merge(analyses::router())
 }
 
 pub fn router(state: AppState) -> Router {

@@ -16,7 +16,8 @@ use utoipa::openapi::{ContentBuilder, Ref, RefOr, Response, ResponseBuilder};
         title = "windmeta",
         description = "Rapid uncertainty quantification of tall buildings under stochastic wind: PC-NARX \
             metamodels calibrated on a Latin hypercube of reference storms, sampled for peak-response \
-            exceedance curves. Long work (calibrations, validations, large exceedance requests) runs as \
+            exceedance curves, annual curves and return levels under a wind climate, fragility curves and \
+            Sobol indices. Long work (calibrations, validations, large sampling requests) runs as \
             operations: `202 Accepted` with `Location`, then poll or stream the operation. Errors are \
             RFC 9457 problem details naming the field at fault.",
         license(name = "MIT OR Apache-2.0", identifier = "MIT OR Apache-2.0"),
@@ -25,6 +26,7 @@ use utoipa::openapi::{ContentBuilder, Ref, RefOr, Response, ResponseBuilder};
         (name = "calibrations", description = "Fitting metamodels"),
         (name = "operations", description = "Long-running work: state, progress, cancellation"),
         (name = "metamodels", description = "Stored metamodels, exceedance curves, validations"),
+        (name = "analyses", description = "Annual curves and return levels, fragility curves, Sobol indices"),
         (name = "presets", description = "Built-in studies"),
         (name = "health", description = "Liveness, readiness, metrics"),
     ),

@@ -3,6 +3,7 @@
 use super::{ApiQuery, Page};
 use crate::analysis::ValidationReport;
 use crate::service::AppState;
+use crate::service::analyses::AnalysisAnswer;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::ExceedanceAnswer;
 use crate::service::store::JobRow;
@@ -36,6 +37,9 @@ pub enum OperationKind {
     Calibration,
     Validation,
     Exceedance,
+    Hazard,
+    Fragility,
+    Sensitivity,
 }
 
 impl OperationKind {
@@ -44,6 +48,9 @@ impl OperationKind {
             OperationKind::Calibration => "calibration",
             OperationKind::Validation => "validation",
             OperationKind::Exceedance => "exceedance",
+            OperationKind::Hazard => "hazard",
+            OperationKind::Fragility => "fragility",
+            OperationKind::Sensitivity => "sensitivity",
         }
     }
 }
@@ -64,9 +71,11 @@ pub enum OperationState {
 pub enum OperationResult {
     Validation(Box<ValidationReport>),
     Exceedance(Box<ExceedanceAnswer>),
+    Analysis(Box<AnalysisAnswer>),
 }
 
-/// Long-running work (a calibration, a validation, a large exceedance request).
+/// Long-running work (a calibration, a validation, a large exceedance, hazard, fragility or
+/// sensitivity request).
 #[derive(Debug, Clone, Serialize, ToSchema)]
 pub struct Operation {
     pub id: String,
@@ -80,7 +89,7 @@ pub struct Operation {
     pub error: Option<String>,
     /// The metamodel a succeeded calibration stored.
     pub metamodel_id: Option<String>,
-    /// The report of a succeeded validation or the curve of a succeeded exceedance request.
+    /// The report of a succeeded validation, or the answer of a succeeded sampling request.
     pub result: Option<OperationResult>,
     /// How many times a worker took it up (more than one after a restart or a lost lease).
     pub attempts: i64,
@@ -110,6 +119,9 @@ pub fn operation(row: &JobRow) -> Result<Operation, ApiError> {
         (None, _) | (Some(_), OperationKind::Calibration) => None,
         (Some(text), OperationKind::Validation) => Some(OperationResult::Validation(stored(text)?)),
         (Some(text), OperationKind::Exceedance) => Some(OperationResult::Exceedance(stored(text)?)),
+        (Some(text), OperationKind::Hazard | OperationKind::Fragility | OperationKind::Sensitivity) => {
+            Some(OperationResult::Analysis(stored(text)?))
+        }
     };
     Ok(Operation {
         id: row.id.clone(),

@@ -1,0 +1,308 @@
+//! Annual (hazard), fragility and sensitivity requests: what a client asks, how it is checked, and
+//! the sampling that answers it, shared by the synchronous routes and the workers that run large
+//! requests as operations.
+
+use super::ServeArgs;
+use super::exceedance::{Rendering, ResponseKind, response_of};
+use super::routes::operations::OperationKind;
+use super::schema::thresholds_schema;
+use crate::analysis::{
+    ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions, Response, Sampling,
+    Sensitivity, WIND_SPEED, check_confidence, fragility_svg, hazard_svg, metamodel_fragility, metamodel_hazard,
+    metamodel_sensitivity,
+};
+use crate::error::{Error, Result};
+use crate::problem::Problem;
+use crate::surrogate::{Metamodel, Observer};
+use crate::uncertainty::Marginal;
+use serde::{Deserialize, Serialize};
+use utoipa::ToSchema;
+
+/// `POST /v1/metamodels/{id}/hazard`: every field optional.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct HazardRequest {
+    /// Storms run through the metamodel; at most the server's `--max-analysis-storms`.
+    #[schema(minimum = 1, maximum = 1000000, default = 20000)]
+    #[serde(deserialize_with = "crate::whole::count")]
+    pub samples: usize,
+    #[schema(default = 1)]
+    #[serde(deserialize_with = "crate::whole::seed")]
+    pub seed: u64,
+    /// Floor (1-based); the roof when absent.
+    #[schema(minimum = 1, maximum = 200)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    pub floor: Option<usize>,
+    pub response: ResponseKind,
+    /// The law of the annual maximum storm speed at 10 m; the metamodel's `wind_speed` marginal
+    /// when absent.
+    pub climate: Option<ClimateSpec>,
+    /// Peak values (m) at which to report the annual probability; 50 spread over the sampled
+    /// peaks when absent.
+    #[schema(schema_with = thresholds_schema)]
+    pub thresholds: Option<Vec<f64>>,
+    /// Return periods (years, above 1, at most 10⁶); 10, 50, 100, 500, 700, 1000 and 10 000 when
+    /// absent.
+    #[schema(max_items = 100)]
+    pub return_periods: Option<Vec<f64>>,
+    /// A limit (m) whose annual probability and reliability index are reported.
+    #[schema(minimum = 0, maximum = 1000)]
+    pub limit: Option<f64>,
+    #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
+    pub confidence: f64,
+    pub sampling: Sampling,
+}
+
+impl Default for HazardRequest {
+    fn default() -> Self {
+        HazardRequest {
+            samples: 20_000,
+            seed: 1,
+            floor: None,
+            response: ResponseKind::Displacement,
+            climate: None,
+            thresholds: None,
+            return_periods: None,
+            limit: None,
+            confidence: 0.95,
+            sampling: Sampling::Stratified,
+        }
+    }
+}
+
+/// `POST /v1/metamodels/{id}/fragility`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct FragilityRequest {
+    /// Storm speeds at 10 m (m/s, 0 to 150), 1 to 200 of them; 20 to 60 by 2 when absent.
+    #[schema(min_items = 1, max_items = 200)]
+    pub wind_speeds: Vec<f64>,
+    /// Peak values (m).
+    #[schema(schema_with = thresholds_schema)]
+    pub thresholds: Option<Vec<f64>>,
+    /// Storms at each speed.
+    #[schema(minimum = 2, maximum = 1000000, default = 500)]
+    #[serde(deserialize_with = "crate::whole::count")]
+    pub samples: usize,
+    #[schema(default = 1)]
+    #[serde(deserialize_with = "crate::whole::seed")]
+    pub seed: u64,
+    #[schema(minimum = 1, maximum = 200)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    pub floor: Option<usize>,
+    pub response: ResponseKind,
+    #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
+    pub confidence: f64,
+}
+
+impl Default for FragilityRequest {
+    fn default() -> Self {
+        FragilityRequest {
+            wind_speeds: (0..=20).map(|k| 20.0 + 2.0 * k as f64).collect(),
+            thresholds: None,
+            samples: 500,
+            seed: 1,
+            floor: None,
+            response: ResponseKind::Displacement,
+            confidence: 0.95,
+        }
+    }
+}
+
+/// `POST /v1/metamodels/{id}/sensitivity`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(default, deny_unknown_fields)]
+pub struct SensitivityRequest {
+    /// Rows N of each of the two base samples: N·(groups + 2) storms are run.
+    #[schema(minimum = 10, maximum = 1000000, default = 1024)]
+    #[serde(deserialize_with = "crate::whole::count")]
+    pub samples: usize,
+    #[schema(default = 1)]
+    #[serde(deserialize_with = "crate::whole::seed")]
+    pub seed: u64,
+    #[schema(minimum = 1, maximum = 200)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    pub floor: Option<usize>,
+    pub response: ResponseKind,
+    #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
+    pub confidence: f64,
+}
+
+impl Default for SensitivityRequest {
+    fn default() -> Self {
+        SensitivityRequest {
+            samples: 1024,
+            seed: 1,
+            floor: None,
+            response: ResponseKind::Displacement,
+            confidence: 0.95,
+        }
+    }
+}
+
+/// Any analysis request, as queued.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "analysis", rename_all = "snake_case")]
+pub enum AnalysisRequest {
+    Hazard(HazardRequest),
+    Fragility(FragilityRequest),
+    Sensitivity(SensitivityRequest),
+}
+
+/// A large analysis request as queued.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct AnalysisJob {
+    pub metamodel_id: String,
+    pub request: AnalysisRequest,
+}
+
+/// An annual curve of a metamodel's peak response.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct HazardAnswer {
+    #[serde(flatten)]
+    pub curve: HazardCurve,
+    pub response: Response,
+    pub metamodel_id: String,
+}
+
+/// Fragility curves of a metamodel's peak response.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct FragilityAnswer {
+    #[serde(flatten)]
+    pub fragility: Fragility,
+    pub response: Response,
+    pub metamodel_id: String,
+}
+
+/// Sobol indices of a metamodel's peak response.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+pub struct SensitivityAnswer {
+    #[serde(flatten)]
+    pub sensitivity: Sensitivity,
+    pub response: Response,
+    pub metamodel_id: String,
+}
+
+/// What an analysis answers.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
+#[serde(untagged)]
+pub enum AnalysisAnswer {
+    Hazard(Box<HazardAnswer>),
+    Fragility(Box<FragilityAnswer>),
+    Sensitivity(Box<SensitivityAnswer>),
+}
+
+impl AnalysisRequest {
+    pub fn kind(&self) -> OperationKind {
+        match self {
+            AnalysisRequest::Hazard(_) => OperationKind::Hazard,
+            AnalysisRequest::Fragility(_) => OperationKind::Fragility,
+            AnalysisRequest::Sensitivity(_) => OperationKind::Sensitivity,
+        }
+    }
+
+    /// The storms the request runs through the metamodel.
+    pub fn storms(&self, problem: &Problem) -> usize {
+        match self {
+            AnalysisRequest::Hazard(r) => r.samples,
+            AnalysisRequest::Fragility(r) => r.samples.saturating_mul(r.wind_speeds.len()),
+            AnalysisRequest::Sensitivity(r) => {
+                let random = problem.inputs.inputs.iter().filter(|i| !matches!(i.marginal, Marginal::Constant { .. }));
+                r.samples.saturating_mul(random.count() + 3)
+            }
+        }
+    }
+
+    /// The checks that need the study but no sampling; errors name the field.
+    pub fn check(&self, config: &ServeArgs, problem: &Problem) -> Result<()> {
+        let storms = self.storms(problem);
+        if storms == 0 || storms > config.max_analysis_storms {
+            return Err(Error::invalid(
+                "samples",
+                format!("the request runs {storms} storms; this server allows 1 to {}", config.max_analysis_storms),
+            ));
+        }
+        match self {
+            AnalysisRequest::Hazard(r) => self.hazard_options(r, problem)?.check(),
+            AnalysisRequest::Fragility(r) => self.fragility_options(r)?.check(),
+            AnalysisRequest::Sensitivity(r) if r.samples < 10 => Err(Error::invalid("samples", "must be at least 10")),
+            AnalysisRequest::Sensitivity(r) => check_confidence(r.confidence),
+        }
+    }
+
+    fn hazard_options(&self, r: &HazardRequest, problem: &Problem) -> Result<HazardOptions> {
+        let climate = match &r.climate {
+            Some(spec) => spec.resolve("climate")?,
+            None => *problem.inputs.marginal(WIND_SPEED)?,
+        };
+        Ok(HazardOptions {
+            climate,
+            samples: r.samples,
+            seed: r.seed,
+            thresholds: r.thresholds.clone(),
+            return_periods: r.return_periods.clone().unwrap_or_else(|| DEFAULT_RETURN_PERIODS.to_vec()),
+            limit: r.limit,
+            confidence: r.confidence,
+            sampling: r.sampling,
+        })
+    }
+
+    fn fragility_options(&self, r: &FragilityRequest) -> Result<FragilityOptions> {
+        let thresholds = r.thresholds.clone().ok_or_else(|| Error::invalid("thresholds", "are required"))?;
+        Ok(FragilityOptions {
+            wind_speeds: r.wind_speeds.clone(),
+            thresholds,
+            samples_per_speed: r.samples,
+            seed: r.seed,
+            confidence: r.confidence,
+        })
+    }
+
+    /// Samples the metamodel and answers (blocking; parallel over storms).
+    pub fn answer(
+        &self,
+        metamodel: &Metamodel,
+        problem: &Problem,
+        metamodel_id: &str,
+        observer: &dyn Observer,
+    ) -> Result<AnalysisAnswer> {
+        let metamodel_id = metamodel_id.to_string();
+        Ok(match self {
+            AnalysisRequest::Hazard(r) => {
+                let response = response_of(r.floor, r.response, problem);
+                let options = self.hazard_options(r, problem)?;
+                let curve = metamodel_hazard(metamodel, problem, response, &options, observer)?;
+                AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response, metamodel_id }))
+            }
+            AnalysisRequest::Fragility(r) => {
+                let response = response_of(r.floor, r.response, problem);
+                let fragility =
+                    metamodel_fragility(metamodel, problem, response, &self.fragility_options(r)?, observer)?;
+                AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response, metamodel_id }))
+            }
+            AnalysisRequest::Sensitivity(r) => {
+                let response = response_of(r.floor, r.response, problem);
+                let sensitivity =
+                    metamodel_sensitivity(metamodel, problem, response, r.samples, r.seed, r.confidence, observer)?;
+                AnalysisAnswer::Sensitivity(Box::new(SensitivityAnswer { sensitivity, response, metamodel_id }))
+            }
+        })
+    }
+}
+
+impl AnalysisAnswer {
+    /// The content type and body: JSON, CSV of an annual curve, SVG of an annual curve or of
+    /// fragility curves; JSON where the asked format does not apply.
+    pub fn render(&self, rendering: Rendering) -> (&'static str, String) {
+        match (self, rendering) {
+            (AnalysisAnswer::Hazard(a), Rendering::Csv) => ("text/csv", a.curve.csv()),
+            (AnalysisAnswer::Hazard(a), Rendering::Svg) => {
+                ("image/svg+xml", hazard_svg(&a.curve, &format!("peak {:?} x (m)", a.response)))
+            }
+            (AnalysisAnswer::Fragility(a), Rendering::Svg) => {
+                ("image/svg+xml", fragility_svg(&a.fragility, &format!("peak {:?}", a.response)))
+            }
+            _ => ("application/json", serde_json::to_string(self).expect("an answer serialises")),
+        }
+    }
+}

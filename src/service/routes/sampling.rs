@@ -1,0 +1,98 @@
+//! What every sampling route shares: answer at once on a blocking thread, within the server's
+//! synchronous slots and timeout and stopped when the client leaves, or queue the request as an
+//! operation when it is large or the client prefers.
+
+use super::accept_job;
+use super::operations::OperationKind;
+use crate::problem::Problem;
+use crate::service::AppState;
+use crate::service::cache::Loaded;
+use crate::service::error::ApiError;
+use crate::service::exceedance::{Rendering, RequestWatch, StopOnDrop};
+use crate::surrogate::{Metamodel, Observer};
+use axum::http::{HeaderMap, header};
+use axum::response::{IntoResponse, Response as HttpResponse};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// Seconds a client should wait before offering a synchronous request again.
+const BUSY_RETRY_S: u64 = 1;
+
+/// Whether the client asked for the answer as an operation (RFC 7240 `Prefer: respond-async`).
+fn prefers_async(headers: &HeaderMap) -> bool {
+    headers
+        .get_all("prefer")
+        .iter()
+        .filter_map(|v| v.to_str().ok())
+        .any(|v| v.split(',').any(|p| p.trim().eq_ignore_ascii_case("respond-async")))
+}
+
+/// A request as it would be queued: the endpoint its idempotency keys belong to, its kind, and
+/// the job's JSON.
+pub struct Queued {
+    pub endpoint: &'static str,
+    pub kind: OperationKind,
+    pub job: String,
+}
+
+/// The rendered answer of a synchronous request, made on a blocking thread.
+pub type Work = Box<
+    dyn FnOnce(&Metamodel, &Problem, &dyn Observer, Rendering) -> crate::error::Result<(&'static str, String)> + Send,
+>;
+
+/// Answers with `work` at once when `storms` is within the synchronous limit and the client did
+/// not prefer otherwise; queues `queued` as an operation (202) when not.
+pub async fn answer_or_queue(
+    state: &AppState,
+    headers: &HeaderMap,
+    loaded: Loaded,
+    storms: usize,
+    queued: impl FnOnce() -> Queued,
+    work: Work,
+) -> Result<HttpResponse, ApiError> {
+    if storms > state.config.max_sync_samples || prefers_async(headers) {
+        let Queued { endpoint, kind, job } = queued();
+        return accept_job(state, headers, endpoint, kind, job).await;
+    }
+    let slots = state.config.sync_request_slots();
+    let permit = state.sampling.clone().try_acquire_owned().map_err(|_| {
+        ApiError::unavailable(
+            format!("{slots} sampling requests are being answered; retry, or send `Prefer: respond-async`"),
+            BUSY_RETRY_S,
+        )
+    })?;
+    let accept = headers.get(header::ACCEPT).and_then(|v| v.to_str().ok()).unwrap_or("application/json");
+    let rendering = Rendering::from_accept(accept);
+    let watch = Arc::new(RequestWatch::new(state.draining.clone()));
+    let _stop_when_the_client_leaves = StopOnDrop(watch.clone());
+    let running = {
+        let watch = watch.clone();
+        tokio::task::spawn_blocking(move || {
+            // Held until the sampling has stopped, whatever became of the request.
+            let _permit = permit;
+            let (metamodel, problem) = loaded.as_ref();
+            work(metamodel, problem, watch.as_ref(), rendering)
+        })
+    };
+    let timeout = Duration::from_secs(state.config.sync_timeout_s);
+    let (content_type, body) = match tokio::time::timeout(timeout, running).await {
+        Ok(joined) => match joined.map_err(ApiError::internal)? {
+            Ok(rendered) => rendered,
+            Err(crate::error::Error::Cancelled) => {
+                return Err(ApiError::unavailable("the server is shutting down", BUSY_RETRY_S));
+            }
+            Err(error) => return Err(error.into()),
+        },
+        Err(_) => {
+            watch.stop();
+            return Err(ApiError::unavailable(
+                format!(
+                    "not answered within {} s; ask for fewer samples or send `Prefer: respond-async`",
+                    timeout.as_secs()
+                ),
+                BUSY_RETRY_S,
+            ));
+        }
+    };
+    Ok(([(header::CONTENT_TYPE, content_type)], body).into_response())
+}
