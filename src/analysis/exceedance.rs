@@ -126,7 +126,8 @@ pub fn metamodel_peaks(
     check_samples(samples)?;
     let rows = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..samples).collect();
-    peaks_at(metamodel, &Draws { problem, rows: &rows, storms: &storms, seed }, response, observer)
+    let draws = Draws { problem, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
+    peaks_at(metamodel, &draws, response, observer)
 }
 
 /// Errs unless 1 ≤ samples ≤ [`MAX_SAMPLES`].
@@ -145,12 +146,23 @@ pub struct Draws<'a> {
     pub rows: &'a [Vec<f64>],
     pub storms: &'a [usize],
     pub seed: u64,
+    pub on_divergence: OnDivergence,
+}
+
+/// What a storm whose metamodel free run diverges does to an analysis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OnDivergence {
+    /// The analysis fails, naming the sample (where every peak is needed: moments, Sobol indices).
+    Fail,
+    /// Its peak is taken as infinite: it exceeds every threshold (conservative; counted and reported
+    /// by the analyses that allow it).
+    Exceed,
 }
 
 /// Peaks of `response` for every row of `draws`, in parallel by batches of [`LANES`], reporting
 /// progress and stopping when `observer` asks.
 pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observer: &dyn Observer) -> Result<Vec<f64>> {
-    let Draws { problem, rows, storms, seed } = *draws;
+    let Draws { problem, rows, storms, seed, on_divergence } = *draws;
     assert_eq!(rows.len(), storms.len(), "one storm per row");
     response.check(problem.structure.floors())?;
     let path = metamodel.calibration.options.wind;
@@ -177,7 +189,14 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
                     .enumerate()
                     .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
                     .collect();
-                let peaks = metamodel.peaks(problem, &batch, &weights, batch_workspace)?;
+                let peaks = match on_divergence {
+                    OnDivergence::Fail => metamodel.peaks(problem, &batch, &weights, batch_workspace)?,
+                    OnDivergence::Exceed => metamodel
+                        .peaks_or_divergence(problem, &batch, &weights, batch_workspace)?
+                        .into_iter()
+                        .map(|peak| peak.unwrap_or(f64::INFINITY))
+                        .collect(),
+                };
                 let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();
                 observer.progress(Progress::Samples { done, total });
                 Ok(peaks)

@@ -4,7 +4,7 @@
 
 use super::exceedance::{check_confidence, check_samples, clopper_pearson};
 use super::hazard::WIND_SPEED;
-use super::{Draws, Response, check_thresholds, peaks_at};
+use super::{Draws, OnDivergence, Response, check_thresholds, peaks_at};
 use crate::cancel::Never;
 use crate::error::{Error, Result};
 use crate::optimise::nelder_mead;
@@ -88,6 +88,8 @@ pub struct Fragility {
     pub confidence: f64,
     /// The wind speeds of the calibration's experiments, lowest and highest (m/s).
     pub calibrated_wind_range: [f64; 2],
+    /// Storms whose metamodel free run diverged, per speed: counted as exceeding every threshold.
+    pub diverged_storms: Vec<usize>,
 }
 
 /// The fragility curves of the peaks `peaks_of` returns for rows (inputs, storm stream).
@@ -133,6 +135,7 @@ pub fn fragility(
         samples_per_speed: n,
         confidence: options.confidence,
         calibrated_wind_range: calibrated,
+        diverged_storms: peaks.chunks(n).map(|p| p.iter().filter(|y| y.is_infinite()).count()).collect(),
     })
 }
 
@@ -201,7 +204,8 @@ pub fn metamodel_fragility(
     response.check(problem.structure.floors())?;
     let calibrated = metamodel.calibrated_range(problem, WIND_SPEED)?;
     fragility(&problem.inputs, options, calibrated, |rows, storms| {
-        peaks_at(metamodel, &Draws { problem, rows, storms, seed: options.seed }, response, observer)
+        let draws = Draws { problem, rows, storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
+        peaks_at(metamodel, &draws, response, observer)
     })
 }
 

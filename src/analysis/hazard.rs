@@ -2,7 +2,7 @@
 //! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
 //! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
 
-use super::exceedance::{Draws, automatic_thresholds, check_confidence, check_samples, peaks_at};
+use super::exceedance::{Draws, OnDivergence, automatic_thresholds, check_confidence, check_samples, peaks_at};
 use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
 use super::{Response, check_thresholds};
 use crate::error::{Error, Result};
@@ -126,6 +126,9 @@ pub struct HazardCurve {
     pub climate_beyond_calibrated_range: f64,
     /// The climate's probability of storms too rare to be run; they are counted as exceeding.
     pub unsampled_probability: f64,
+    /// Storms whose metamodel free run diverged (far outside the calibrated inputs, as a rule):
+    /// counted as exceeding every threshold.
+    pub diverged_storms: usize,
     pub samples: usize,
     pub strata: usize,
     pub sampling: Sampling,
@@ -171,7 +174,7 @@ pub fn hazard_curve(
         Sampling::MonteCarlo => WindStrata::monte_carlo(),
     };
     let mut rng = rng_from_seed(options.seed);
-    let mut run = 0;
+    let (mut run, mut diverged) = (0, 0);
     let mut stage = |counts: &[usize]| -> Result<(Vec<f64>, Vec<bool>)> {
         let speeds = strata.speeds(&options.climate, counts, &mut rng);
         if let Some(&v) = speeds.iter().find(|v| WindLoads::check_speed(**v).is_err()) {
@@ -183,6 +186,7 @@ pub fn hazard_curve(
         }
         let peaks = peaks_of(&rows, run)?;
         run += rows.len();
+        diverged += peaks.iter().filter(|p| p.is_infinite()).count();
         Ok((peaks, speeds.iter().map(|v| !(calibrated[0]..=calibrated[1]).contains(v)).collect()))
     };
     let pilot_share = if strata.count() == 1 { 1 } else { 4 };
@@ -197,7 +201,7 @@ pub fn hazard_curve(
     let mut sample = StratifiedPeaks::new(&strata, &pilot_counts, &peaks, &outside);
     let budget = options.samples - pilot_counts.iter().sum::<usize>();
     if strata.count() > 1 && budget > 0 {
-        let all = sample.all_peaks();
+        let all = sample.finite_peaks();
         let targets: Vec<f64> = options
             .return_periods
             .iter()
@@ -209,10 +213,10 @@ pub fn hazard_curve(
         sample.add(&counts, &peaks, &outside);
     }
     let confidence = options.confidence;
-    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&sample.all_peaks(), 50));
+    let finite = sample.finite_peaks();
+    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&finite, 50));
     let estimates: Vec<Estimate> = thresholds.iter().map(|&x| sample.exceedance(x, confidence)).collect();
-    let all = sample.all_peaks();
-    let return_levels = options.return_periods.iter().map(|&t| return_level(&sample, &all, t, confidence)).collect();
+    let return_levels = options.return_periods.iter().map(|&t| return_level(&sample, &finite, t, confidence)).collect();
     let reliability = options.limit.map(|limit| reliability(limit, sample.exceedance(limit, confidence)));
     let climate = &options.climate;
     Ok(HazardCurve {
@@ -229,6 +233,7 @@ pub fn hazard_curve(
         calibrated_wind_range: calibrated,
         climate_beyond_calibrated_range: climate.cdf(calibrated[0]) + climate.survival(calibrated[1]),
         unsampled_probability: strata.unsampled(),
+        diverged_storms: diverged,
         samples: run,
         strata: strata.count(),
         sampling: options.sampling,
@@ -281,7 +286,8 @@ pub fn metamodel_hazard(
     let calibrated = metamodel.calibrated_range(problem, WIND_SPEED)?;
     hazard_curve(&problem.inputs, options, calibrated, |rows, first| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
-        peaks_at(metamodel, &Draws { problem, rows, storms: &storms, seed: options.seed }, response, observer)
+        let draws = Draws { problem, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
+        peaks_at(metamodel, &draws, response, observer)
     })
 }
 

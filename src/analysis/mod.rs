@@ -15,8 +15,8 @@ mod validation;
 
 pub use climate::ClimateSpec;
 pub use exceedance::{
-    Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD_M, MAX_THRESHOLDS, automatic_thresholds, check_confidence,
-    check_samples, check_thresholds, exceedance_curve, max_exceedance_gap, metamodel_peaks, peaks_at,
+    Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD_M, MAX_THRESHOLDS, OnDivergence, automatic_thresholds,
+    check_confidence, check_samples, check_thresholds, exceedance_curve, max_exceedance_gap, metamodel_peaks, peaks_at,
 };
 pub use fragility::{
     Fragility, FragilityCurve, FragilityOptions, LognormalFragility, MAX_WIND_SPEEDS, fragility, metamodel_fragility,

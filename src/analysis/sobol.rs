@@ -9,7 +9,7 @@
 //! Intervals by bootstrapping the N rows (percentile, 500 resamples).
 
 use super::exceedance::{check_confidence, check_samples};
-use super::{Draws, Response, peaks_at};
+use super::{Draws, OnDivergence, Response, peaks_at};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::{Metamodel, Observer};
@@ -159,7 +159,12 @@ pub fn metamodel_sensitivity(
 ) -> Result<Sensitivity> {
     response.check(problem.structure.floors())?;
     sobol_indices(&problem.inputs, samples, seed, confidence, |rows, storms| {
-        peaks_at(metamodel, &Draws { problem, rows, storms, seed }, response, observer)
+        peaks_at(
+            metamodel,
+            &Draws { problem, rows, storms, seed, on_divergence: OnDivergence::Fail },
+            response,
+            observer,
+        )
     })
 }
 

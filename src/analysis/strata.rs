@@ -160,9 +160,9 @@ impl StratifiedPeaks {
         sampled.sum::<f64>() + self.unsampled
     }
 
-    /// Every sampled peak, ascending.
-    pub fn all_peaks(&self) -> Vec<f64> {
-        let mut all: Vec<f64> = self.strata.iter().flatten().map(|p| p.0).collect();
+    /// Every finite sampled peak (a diverged storm's is infinite), ascending.
+    pub fn finite_peaks(&self) -> Vec<f64> {
+        let mut all: Vec<f64> = self.strata.iter().flatten().map(|p| p.0).filter(|p| p.is_finite()).collect();
         all.sort_by(f64::total_cmp);
         all
     }

@@ -229,6 +229,46 @@ impl Metamodel {
         weights: &[f64],
         workspace: &mut Workspace,
     ) -> Result<Vec<f64>> {
+        self.run_peaks(problem, samples, weights, workspace)?
+            .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))
+    }
+
+    /// As [`peaks`](Self::peaks), but a sample whose free run diverges gets `None` instead of
+    /// failing the batch: it is taken out and the others run again, with the same results (a
+    /// lane's values do not depend on the other lanes).
+    pub fn peaks_or_divergence(
+        &self,
+        problem: &Problem,
+        samples: &[(usize, &[f64], &dyn ForceSource)],
+        weights: &[f64],
+        workspace: &mut Workspace,
+    ) -> Result<Vec<Option<f64>>> {
+        let mut peaks = vec![None; samples.len()];
+        let mut left: Vec<usize> = (0..samples.len()).collect();
+        while !left.is_empty() {
+            let batch: Vec<_> = left.iter().map(|&i| samples[i]).collect();
+            match self.run_peaks(problem, &batch, weights, workspace)? {
+                Ok(values) => {
+                    left.iter().zip(values).for_each(|(&i, value)| peaks[i] = Some(value));
+                    break;
+                }
+                Err(BatchError::Diverged(d)) => {
+                    left.remove(d.lane);
+                }
+                Err(error) => return Err(batch_error(error, &batch.iter().map(|s| Some(s.0)).collect::<Vec<_>>())),
+            }
+        }
+        Ok(peaks)
+    }
+
+    /// The batch's peaks, or why its free run failed (the outer error: a sample's model).
+    fn run_peaks(
+        &self,
+        problem: &Problem,
+        samples: &[(usize, &[f64], &dyn ForceSource)],
+        weights: &[f64],
+        workspace: &mut Workspace,
+    ) -> Result<std::result::Result<Vec<f64>, BatchError>> {
         let mut levels = Vec::with_capacity(samples.len());
         let mut batch = Vec::with_capacity(samples.len());
         for &(_, x, forces) in samples {
@@ -243,9 +283,9 @@ impl Metamodel {
         }
         let mut peaks = [0.0f64; LANES];
         let mut sink = Sink::Peaks { gains: &gains, offsets, peaks: &mut peaks };
-        batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, workspace, &mut sink)
-            .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))?;
-        Ok(peaks[..samples.len()].to_vec())
+        let run =
+            batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, workspace, &mut sink);
+        Ok(run.map(|()| peaks[..samples.len()].to_vec()))
     }
 }
 
