@@ -74,7 +74,8 @@ pub struct FragilityCurve {
     /// Clopper-Pearson band at the analysis's confidence.
     pub lower: Vec<f64>,
     pub upper: Vec<f64>,
-    /// None when no speed of the grid sees both exceeding and non-exceeding storms.
+    /// Fitted over the speeds where no storm diverged; none when none of them sees both exceeding
+    /// and non-exceeding storms.
     pub lognormal: Option<LognormalFragility>,
 }
 
@@ -88,7 +89,8 @@ pub struct Fragility {
     pub confidence: f64,
     /// The wind speeds of the calibration's experiments, lowest and highest (m/s).
     pub calibrated_wind_range: [f64; 2],
-    /// Storms whose metamodel free run diverged, per speed: counted as exceeding every threshold.
+    /// Storms whose metamodel free run diverged or had no stable rest, per speed: counted as
+    /// exceeding every threshold, and the speed left out of the lognormal fits.
     pub diverged_storms: Vec<usize>,
 }
 
@@ -113,6 +115,11 @@ pub fn fragility(
     }
     let storms: Vec<usize> = (0..rows.len()).map(|i| i % n).collect();
     let peaks = peaks_of(&rows, &storms)?;
+    let diverged: Vec<usize> = peaks.chunks(n).map(|p| p.iter().filter(|y| y.is_infinite()).count()).collect();
+    // The fit only over the speeds where the metamodel ran every storm: where some diverged it
+    // extrapolates, and counting them as exceeding would bend the fitted curve.
+    let sound: Vec<usize> = (0..diverged.len()).filter(|&j| diverged[j] == 0).collect();
+    let sound_speeds: Vec<f64> = sound.iter().map(|&j| options.wind_speeds[j]).collect();
     let curves = options
         .thresholds
         .iter()
@@ -125,7 +132,12 @@ pub fn fragility(
                 probability: counts.iter().map(|&k| k as f64 / n as f64).collect(),
                 lower: bands.iter().map(|b| b.0).collect(),
                 upper: bands.iter().map(|b| b.1).collect(),
-                lognormal: fit_lognormal(&options.wind_speeds, &counts, n, options.confidence),
+                lognormal: fit_lognormal(
+                    &sound_speeds,
+                    &sound.iter().map(|&j| counts[j]).collect::<Vec<_>>(),
+                    n,
+                    options.confidence,
+                ),
             }
         })
         .collect();
@@ -135,7 +147,7 @@ pub fn fragility(
         samples_per_speed: n,
         confidence: options.confidence,
         calibrated_wind_range: calibrated,
-        diverged_storms: peaks.chunks(n).map(|p| p.iter().filter(|y| y.is_infinite()).count()).collect(),
+        diverged_storms: diverged,
     })
 }
 

@@ -126,7 +126,8 @@ pub struct HazardCurve {
     pub climate_beyond_calibrated_range: f64,
     /// The climate's probability of storms too rare to be run; they are counted as exceeding.
     pub unsampled_probability: f64,
-    /// Storms whose metamodel free run diverged (far outside the calibrated inputs, as a rule):
+    /// Storms whose metamodel free run diverged or had no stable rest (far outside the calibrated
+    /// inputs, as a rule):
     /// counted as exceeding every threshold.
     pub diverged_storms: usize,
     pub samples: usize,

@@ -3,9 +3,12 @@
 //! (first order) and with all its interactions (total).
 //!
 //! Pick-freeze estimators on two independent samples A and B of N rows and, per group g, the
-//! sample A_B^g that takes group g from B and the rest from A (N·(G + 2) runs): the first-order
-//! index by Saltelli et al. (2010), V_g = mean(f_B·(f_{A_B^g} − f_A)), the total index by Jansen
-//! (1999), VT_g = mean((f_A − f_{A_B^g})²)/2, both divided by the variance of f over A and B.
+//! sample A_B^g that takes group g from B and the rest from A (N·(G + 2) runs). The first-order
+//! index by Janon et al. (2014) from the pairs (f_B, f_{A_B^g}), which share group g only: the
+//! correlation of the pair with both centred and scaled by their pooled moments, asymptotically
+//! efficient and far less noisy than Saltelli's (2010) mean(f_B·(f_{A_B^g} − f_A))/V for a dominant
+//! input (at full size the wind speed's interval was ±0.2 by Saltelli's at N = 4096). The total
+//! index by Jansen (1999), mean((f_A − f_{A_B^g})²)/2 divided by the variance of f over A and B.
 //! Intervals by bootstrapping the N rows (percentile, 500 resamples).
 
 use super::exceedance::{check_confidence, check_samples};
@@ -111,9 +114,13 @@ pub fn sobol_indices(
         mixed
             .chunks(samples)
             .map(|fab| {
-                let first = rows.iter().map(|&j| fb[j] * (fab[j] - fa[j])).sum::<f64>() / n;
+                // f_B and f_{A_B^g} share group g and nothing else.
+                let centre = rows.iter().map(|&j| fb[j] + fab[j]).sum::<f64>() / (2.0 * n);
+                let product = rows.iter().map(|&j| fb[j] * fab[j]).sum::<f64>() / n;
+                let square = rows.iter().map(|&j| fb[j] * fb[j] + fab[j] * fab[j]).sum::<f64>() / (2.0 * n);
+                let first = (product - centre * centre) / (square - centre * centre);
                 let total = rows.iter().map(|&j| (fa[j] - fab[j]).powi(2)).sum::<f64>() / (2.0 * n);
-                (first / variance, total / variance)
+                (first, total / variance)
             })
             .collect()
     };

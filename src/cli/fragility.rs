@@ -95,6 +95,16 @@ fn table(result: &Fragility, what: &str, seconds: f64) -> String {
             None => out += &format!("{:>10.5}  never or always exceeded on this grid\n", c.threshold),
         }
     }
+    for (v, &count) in result.wind_speeds.iter().zip(&result.diverged_storms).filter(|(_, c)| **c > 0) {
+        out += &format!(
+            "at {v} m/s {count} of {} storms diverged (counted as exceeding; the speed is left out of the fits)\n",
+            result.samples_per_speed
+        );
+    }
+    out += &format!(
+        "calibrated wind speeds {:.1}-{:.1} m/s\n",
+        result.calibrated_wind_range[0], result.calibrated_wind_range[1]
+    );
     out
 }
 

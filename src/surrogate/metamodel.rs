@@ -2,7 +2,7 @@
 //! versioned.
 
 use super::Parametrization;
-use super::batch::{self, BatchError, BatchSample, LANES, Lanes, ModeProgram, Sink, Workspace};
+use super::batch::{self, BatchError, BatchSample, Divergence, LANES, Lanes, ModeProgram, Sink, Workspace};
 use super::narx::NarxTerm;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
@@ -233,7 +233,8 @@ impl Metamodel {
             .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))
     }
 
-    /// As [`peaks`](Self::peaks), but a sample whose free run diverges gets `None` instead of
+    /// As [`peaks`](Self::peaks), but a sample whose free run diverges, or whose model has no
+    /// stable rest (both numerical failures of the model at its inputs), gets `None` instead of
     /// failing the batch: it is taken out and the others run again, with the same results (a
     /// lane's values do not depend on the other lanes).
     pub fn peaks_or_divergence(
@@ -252,8 +253,9 @@ impl Metamodel {
                     left.iter().zip(values).for_each(|(&i, value)| peaks[i] = Some(value));
                     break;
                 }
-                Err(BatchError::Diverged(d)) => {
-                    left.remove(d.lane);
+                Err(BatchError::Diverged(Divergence { lane, .. }))
+                | Err(BatchError::Model { lane, error: Error::Numerical(_) }) => {
+                    left.remove(lane);
                 }
                 Err(error) => return Err(batch_error(error, &batch.iter().map(|s| Some(s.0)).collect::<Vec<_>>())),
             }
@@ -261,7 +263,7 @@ impl Metamodel {
         Ok(peaks)
     }
 
-    /// The batch's peaks, or why its free run failed (the outer error: a sample's model).
+    /// The batch's peaks, or why a lane failed numerically (the outer error: anything else).
     fn run_peaks(
         &self,
         problem: &Problem,
@@ -271,8 +273,12 @@ impl Metamodel {
     ) -> Result<std::result::Result<Vec<f64>, BatchError>> {
         let mut levels = Vec::with_capacity(samples.len());
         let mut batch = Vec::with_capacity(samples.len());
-        for &(_, x, forces) in samples {
-            let (level, theta) = self.sample(problem, x, forces)?;
+        for (lane, &(_, x, forces)) in samples.iter().enumerate() {
+            let (level, theta) = match self.sample(problem, x, forces) {
+                Ok(sampled) => sampled,
+                Err(error @ Error::Numerical(_)) => return Ok(Err(BatchError::Model { lane, error })),
+                Err(error) => return Err(error),
+            };
             levels.push(level);
             batch.push(BatchSample { theta, forces });
         }
