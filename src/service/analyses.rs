@@ -4,7 +4,6 @@
 
 use super::ServeArgs;
 use super::exceedance::{Rendering, ResponseKind, response_of};
-use super::routes::operations::OperationKind;
 use super::schema::thresholds_schema;
 use crate::analysis::{
     ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions, Response, Sampling,
@@ -193,14 +192,6 @@ pub enum AnalysisAnswer {
 }
 
 impl AnalysisRequest {
-    pub fn kind(&self) -> OperationKind {
-        match self {
-            AnalysisRequest::Hazard(_) => OperationKind::Hazard,
-            AnalysisRequest::Fragility(_) => OperationKind::Fragility,
-            AnalysisRequest::Sensitivity(_) => OperationKind::Sensitivity,
-        }
-    }
-
     /// The storms the request runs through the metamodel.
     pub fn storms(&self, problem: &Problem) -> usize {
         match self {

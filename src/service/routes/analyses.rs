@@ -3,7 +3,7 @@
 
 use super::ApiJson;
 use super::metamodels::load;
-use super::operations::Operation;
+use super::operations::{Operation, OperationKind};
 use super::sampling::{Queued, Work, answer_or_queue};
 use crate::service::AppState;
 use crate::service::analyses::{
@@ -35,7 +35,11 @@ async fn analyse(
         let (id, request) = (id.clone(), request.clone());
         move || Queued {
             endpoint,
-            kind: request.kind(),
+            kind: match request {
+                AnalysisRequest::Hazard(_) => OperationKind::Hazard,
+                AnalysisRequest::Fragility(_) => OperationKind::Fragility,
+                AnalysisRequest::Sensitivity(_) => OperationKind::Sensitivity,
+            },
             job: serde_json::to_string(&AnalysisJob { metamodel_id: id, request }).expect("a job serialises"),
         }
     };
