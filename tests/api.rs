@@ -132,6 +132,9 @@ async fn calibrate_follow_fetch_and_sample() {
         done["result"]["annual_probability"], annual["annual_probability"],
         "the operation's answer is the same"
     );
+    // Checked before anything is queued, however large the request.
+    let (s, ct, body) = problem(app.post(&hazard, json!({"floor": 0, "samples": 50000})).await).await;
+    assert_problem(s, &ct, &body, 422, "floor");
     let (s, ct, body) = problem(app.post(&hazard, json!({"return_periods": [0.5]})).await).await;
     assert_problem(s, &ct, &body, 422, "return_periods");
     let (s, ct, body) =

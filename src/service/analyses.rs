@@ -213,6 +213,12 @@ impl AnalysisRequest {
                 format!("the request runs {storms} storms; this server allows 1 to {}", config.max_analysis_storms),
             ));
         }
+        let (floor, kind) = match self {
+            AnalysisRequest::Hazard(r) => (r.floor, r.response),
+            AnalysisRequest::Fragility(r) => (r.floor, r.response),
+            AnalysisRequest::Sensitivity(r) => (r.floor, r.response),
+        };
+        response_of(floor, kind, problem).check(problem.structure.floors())?;
         match self {
             AnalysisRequest::Hazard(r) => self.hazard_options(r, problem)?.check(),
             AnalysisRequest::Fragility(r) => self.fragility_options(r)?.check(),
