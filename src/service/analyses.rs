@@ -94,6 +94,26 @@ pub struct FragilityRequest {
     pub confidence: f64,
 }
 
+impl HazardRequest {
+    /// The analysis's options: the climate resolved (the metamodel's own wind law by default).
+    fn options(&self, problem: &Problem) -> Result<HazardOptions> {
+        let climate = match &self.climate {
+            Some(spec) => spec.resolve("climate")?,
+            None => *problem.inputs.marginal(WIND_SPEED)?,
+        };
+        Ok(HazardOptions {
+            climate,
+            samples: self.samples,
+            seed: self.seed,
+            thresholds: self.thresholds.clone(),
+            return_periods: self.return_periods.clone().unwrap_or_else(|| DEFAULT_RETURN_PERIODS.to_vec()),
+            limit: self.limit,
+            confidence: self.confidence,
+            sampling: self.sampling,
+        })
+    }
+}
+
 impl Default for FragilityRequest {
     fn default() -> Self {
         FragilityRequest {
@@ -105,6 +125,20 @@ impl Default for FragilityRequest {
             response: ResponseKind::Displacement,
             confidence: 0.95,
         }
+    }
+}
+
+impl FragilityRequest {
+    /// The analysis's options; the thresholds are required.
+    fn options(&self) -> Result<FragilityOptions> {
+        let thresholds = self.thresholds.clone().ok_or_else(|| Error::invalid("thresholds", "are required"))?;
+        Ok(FragilityOptions {
+            wind_speeds: self.wind_speeds.clone(),
+            thresholds,
+            samples_per_speed: self.samples,
+            seed: self.seed,
+            confidence: self.confidence,
+        })
     }
 }
 
@@ -220,39 +254,11 @@ impl AnalysisRequest {
         };
         response_of(floor, kind, problem).check(problem.structure.floors())?;
         match self {
-            AnalysisRequest::Hazard(r) => self.hazard_options(r, problem)?.check(),
-            AnalysisRequest::Fragility(r) => self.fragility_options(r)?.check(),
+            AnalysisRequest::Hazard(r) => r.options(problem)?.check(),
+            AnalysisRequest::Fragility(r) => r.options()?.check(),
             AnalysisRequest::Sensitivity(r) if r.samples < 10 => Err(Error::invalid("samples", "must be at least 10")),
             AnalysisRequest::Sensitivity(r) => check_confidence(r.confidence),
         }
-    }
-
-    fn hazard_options(&self, r: &HazardRequest, problem: &Problem) -> Result<HazardOptions> {
-        let climate = match &r.climate {
-            Some(spec) => spec.resolve("climate")?,
-            None => *problem.inputs.marginal(WIND_SPEED)?,
-        };
-        Ok(HazardOptions {
-            climate,
-            samples: r.samples,
-            seed: r.seed,
-            thresholds: r.thresholds.clone(),
-            return_periods: r.return_periods.clone().unwrap_or_else(|| DEFAULT_RETURN_PERIODS.to_vec()),
-            limit: r.limit,
-            confidence: r.confidence,
-            sampling: r.sampling,
-        })
-    }
-
-    fn fragility_options(&self, r: &FragilityRequest) -> Result<FragilityOptions> {
-        let thresholds = r.thresholds.clone().ok_or_else(|| Error::invalid("thresholds", "are required"))?;
-        Ok(FragilityOptions {
-            wind_speeds: r.wind_speeds.clone(),
-            thresholds,
-            samples_per_speed: r.samples,
-            seed: r.seed,
-            confidence: r.confidence,
-        })
     }
 
     /// Samples the metamodel and answers (blocking; parallel over storms).
@@ -267,14 +273,13 @@ impl AnalysisRequest {
         Ok(match self {
             AnalysisRequest::Hazard(r) => {
                 let response = response_of(r.floor, r.response, problem);
-                let options = self.hazard_options(r, problem)?;
+                let options = r.options(problem)?;
                 let curve = metamodel_hazard(metamodel, problem, response, &options, observer)?;
                 AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response, metamodel_id }))
             }
             AnalysisRequest::Fragility(r) => {
                 let response = response_of(r.floor, r.response, problem);
-                let fragility =
-                    metamodel_fragility(metamodel, problem, response, &self.fragility_options(r)?, observer)?;
+                let fragility = metamodel_fragility(metamodel, problem, response, &r.options()?, observer)?;
                 AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response, metamodel_id }))
             }
             AnalysisRequest::Sensitivity(r) => {
