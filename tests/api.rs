@@ -163,7 +163,12 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_problem(s, &ct, &body, 422, "thresholds");
 
     // A validation job against the reference on fresh samples.
-    let response = app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 4, "seed": 9})).await;
+    let response = app
+        .post(
+            &format!("/v1/metamodels/{id}/validations"),
+            json!({"samples": 4, "seed": 9, "fixed": {"wind_speed": 38}}),
+        )
+        .await;
     assert_eq!(response.status().as_u16(), 202);
     let validation: Value = response.json().await.unwrap();
     let done =
@@ -174,9 +179,13 @@ async fn calibrate_follow_fetch_and_sample() {
         "{done}"
     );
     assert_eq!(done["result"]["reference_peak"].as_array().unwrap().len(), 4);
+    assert_eq!(done["result"]["fixed"], json!({"wind_speed": 38.0}));
     let (s, ct, body) =
         problem(app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 1})).await).await;
     assert_problem(s, &ct, &body, 422, "samples");
+    let held = json!({"samples": 4, "fixed": {"damping_ratio": -1}});
+    let (s, ct, body) = problem(app.post(&format!("/v1/metamodels/{id}/validations"), held).await).await;
+    assert_problem(s, &ct, &body, 422, "fixed.damping_ratio");
 
     let metrics = app.client.get(format!("{}/metrics", app.address)).send().await.unwrap().text().await.unwrap();
     assert!(
@@ -221,6 +230,24 @@ async fn bad_input_is_refused_as_problem_json() {
     assert_problem(s, &ct, &body, 422, "unknown input");
     let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"surprise": 1})).await).await;
     assert_problem(s, &ct, &body, 422, "surprise");
+    // Wind coverage: a range, or a climate, each checked and named; not both.
+    let gumbel = json!({"distribution": "gumbel", "location": 25, "scale": 2.5});
+    for (body, field) in [
+        (json!({"cover_wind_speeds": {"lower": 40, "upper": 30}}), "cover_wind_speeds"),
+        (json!({"cover_wind_speeds": {"lower": 30, "upper": 1e9}}), "cover_wind_speeds"),
+        (json!({"cover_wind_speeds": {"lower": 30}}), "upper"),
+        (json!({"cover_climate": {"climate": gumbel, "annual_probability": 0.9}}), "cover_climate.annual_probability"),
+        (json!({"cover_climate": {"climate": {"distribution": "gumbel", "location": 25}}}), "scale"),
+        (json!({"cover_climate": {"climate": gumbel}, "cover_wind_speeds": {"lower": 30, "upper": 60}}), "not both"),
+        (
+            json!({"inputs": {"wind_speed": {"distribution": "constant", "value": 30}},
+                "cover_wind_speeds": {"lower": 30, "upper": 60}}),
+            "holds wind_speed fixed",
+        ),
+    ] {
+        let (s, ct, problem_body) = problem(app.post("/v1/calibrations", body.clone()).await).await;
+        assert_problem(s, &ct, &problem_body, 422, field);
+    }
     let huge = json!({"preset": "frame40", "structure": {"mass": vec![vec![1.0; 200]; 200]}});
     let (s, ct, body) = problem(app.post("/v1/calibrations", huge).await).await;
     assert_problem(s, &ct, &body, 413, "");

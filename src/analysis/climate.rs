@@ -3,6 +3,7 @@
 //! taken as its peak in the year's strongest storm, so P(annual peak > x) = ∫ P(peak > x | v) f(v) dv.
 
 use crate::error::{Error, Result};
+use crate::surrogate::WindCoverage;
 use crate::uncertainty::Marginal;
 use serde::{Deserialize, Deserializer, Serialize};
 use std::collections::BTreeMap;
@@ -66,6 +67,41 @@ impl ClimateSpec {
     }
 }
 
+/// A calibration asked to cover a climate: its design spans the speeds from the climate's median
+/// annual maximum to the speed exceeded with `annual_probability` a year (see
+/// [`crate::surrogate::design`] for how the expansions stay the input model's).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct ClimateCoverage {
+    pub climate: ClimateSpec,
+    /// The rarest annual exceedance probability the answers must reach (10⁻⁵: the 100 000-year speed).
+    #[serde(default = "rarest_default")]
+    #[cfg_attr(feature = "openapi", schema(minimum = 1e-8, maximum = 0.1, default = 1e-5))]
+    pub annual_probability: f64,
+}
+
+fn rarest_default() -> f64 {
+    1e-5
+}
+
+impl ClimateCoverage {
+    /// The speeds to cover; errors name the field under `field`.
+    pub fn wind_speeds(&self, field: &str) -> Result<WindCoverage> {
+        let p = self.annual_probability;
+        if !(1e-8..=0.1).contains(&p) {
+            return Err(Error::invalid(
+                format!("{field}.annual_probability"),
+                format!("must lie in [1e-8, 0.1], got {p}"),
+            ));
+        }
+        let law = self.climate.resolve(&format!("{field}.climate"))?;
+        let coverage = WindCoverage { lower: law.quantile(0.5), upper: law.upper_quantile(p) };
+        coverage.validate()?;
+        Ok(coverage)
+    }
+}
+
 /// The Gumbel law through speeds v_T of return periods T: v = location + scale·y with the reduced
 /// variate y = −ln(−ln(1 − 1/T)), by least squares (exact through two points).
 fn gumbel_through(speeds: &BTreeMap<String, f64>, field: &str) -> Result<Marginal> {
@@ -105,6 +141,20 @@ mod tests {
         for (t, v) in [(50.0, 32.0), (700.0, 40.0)] {
             assert!((law.survival(v) * t - 1.0).abs() < 1e-10, "T = {t}: {}", law.survival(v) * t);
         }
+    }
+
+    /// Gumbel(25, 2.5): median 25 − 2.5·ln(ln 2) = 25.916, 10⁻⁵ speed 25 − 2.5·ln(−ln(1 − 10⁻⁵)) = 53.78.
+    #[test]
+    fn coverage_runs_from_the_median_to_the_rarest_speed() {
+        let coverage: ClimateCoverage =
+            serde_json::from_str(r#"{"climate": {"distribution": "gumbel", "location": 25, "scale": 2.5}}"#).unwrap();
+        let speeds = coverage.wind_speeds("cover_climate").unwrap();
+        assert!((speeds.lower - (25.0 - 2.5 * 2f64.ln().ln())).abs() < 1e-9, "{speeds:?}");
+        assert!((speeds.upper - (25.0 - 2.5 * (-(-1e-5f64).ln_1p()).ln())).abs() < 1e-6, "{speeds:?}");
+        let rare = ClimateCoverage { annual_probability: 0.5, ..coverage };
+        assert!(
+            rare.wind_speeds("cover_climate").unwrap_err().to_string().starts_with("cover_climate.annual_probability")
+        );
     }
 
     #[test]

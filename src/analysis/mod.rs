@@ -13,7 +13,7 @@ mod sobol;
 mod strata;
 mod validation;
 
-pub use climate::ClimateSpec;
+pub use climate::{ClimateCoverage, ClimateSpec};
 pub use exceedance::{
     Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD_M, MAX_THRESHOLDS, OnDivergence, automatic_thresholds,
     check_confidence, check_samples, check_thresholds, exceedance_curve, max_exceedance_gap, metamodel_peaks, peaks_at,

@@ -9,10 +9,11 @@ use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::narx::relative_error;
 use crate::surrogate::{Metamodel, Observer, Progress};
-use crate::uncertainty::{monte_carlo, rng_from_seed};
+use crate::uncertainty::{InputModel, Marginal, monte_carlo, rng_from_seed};
 use crate::wind::Workspace;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
@@ -22,6 +23,10 @@ use std::time::Instant;
 pub struct ValidationReport {
     pub samples: usize,
     pub seed: u64,
+    /// Inputs held at a value for this validation (e.g. the wind speed at an end of the calibrated
+    /// range); the others were drawn from the input model.
+    #[serde(default)]
+    pub fixed: BTreeMap<String, f64>,
     /// Pearson correlation of the peak roof displacements, reference against metamodel.
     pub peak_correlation: f64,
     /// Full PC-NARX on the validation samples: mean over samples of Σ(u − û)²/Σ(u − ū)² of the roof.
@@ -63,10 +68,12 @@ struct SampleResult {
     metamodel_seconds: f64,
 }
 
-/// Runs `samples` fresh Monte Carlo samples through the reference and the metamodel.
+/// Runs `samples` fresh Monte Carlo samples of `inputs` (the study's input model, possibly with
+/// some inputs held) through the reference and the metamodel.
 pub fn validate(
     metamodel: &Metamodel,
     problem: &Problem,
+    inputs: &InputModel,
     samples: usize,
     seed: u64,
     observer: &dyn Observer,
@@ -74,7 +81,20 @@ pub fn validate(
     if !(2..=100_000).contains(&samples) {
         return Err(Error::invalid("samples", format!("must be between 2 and 100000, got {samples}")));
     }
-    let xs = monte_carlo(&problem.inputs, samples, &mut rng_from_seed(seed));
+    if inputs.len() != problem.inputs.len() {
+        return Err(Error::invalid("inputs", "the sampled inputs must be the study's, some possibly held"));
+    }
+    let fixed: BTreeMap<String, f64> = inputs
+        .inputs
+        .iter()
+        .zip(&problem.inputs.inputs)
+        .filter_map(|(sampled, study)| match (sampled.marginal, study.marginal) {
+            (_, Marginal::Constant { .. }) => None,
+            (Marginal::Constant { value }, _) => Some((sampled.name.clone(), value)),
+            _ => None,
+        })
+        .collect();
+    let xs = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let path = metamodel.calibration.options.wind;
     let roof = Response::Displacement { floor: problem.structure.floors() };
     let shapes = &metamodel.modes.shapes;
@@ -133,6 +153,7 @@ pub fn validate(
     Ok(ValidationReport {
         samples,
         seed,
+        fixed,
         peak_correlation: pearson(&reference_peak, &metamodel_peak),
         mean_relative_error: results.iter().map(|r| r.roof_error).sum::<f64>() / n,
         mode_mean_relative_errors: (0..modes)

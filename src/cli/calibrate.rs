@@ -1,8 +1,11 @@
 //! `windmeta calibrate`: a PC-NARX metamodel from a Latin-hypercube design of reference storms.
 
 use super::ProblemArgs;
+use crate::analysis::{ClimateCoverage, ClimateSpec};
 use crate::error::{Error, Result};
-use crate::surrogate::{CalibrationOptions, Observer, Progress, Refinement, calibrate as run_calibration};
+use crate::surrogate::{
+    CalibrationOptions, Observer, Progress, Refinement, WindCoverage, calibrate as run_calibration,
+};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -33,6 +36,17 @@ pub struct CalibrateArgs {
     /// Allow products of output and input powers in the NARX dictionary (22 candidates).
     #[arg(long)]
     pub cross_terms: bool,
+    /// Cover these wind speeds (m/s) beyond the input model's spread, as LOWER:UPPER; the fits
+    /// are weighted so the expansions stay the input model's.
+    #[arg(long, value_name = "LOWER:UPPER", conflicts_with = "cover_climate")]
+    pub cover_wind_speeds: Option<String>,
+    /// Cover a climate (JSON, as `windmeta hazard --climate`): from its median annual maximum to
+    /// the speed of --cover-annual-probability.
+    #[arg(long, value_name = "JSON")]
+    pub cover_climate: Option<String>,
+    /// The rarest annual exceedance probability a covered climate's answers must reach.
+    #[arg(long, default_value_t = 1e-5, requires = "cover_climate")]
+    pub cover_annual_probability: f64,
     /// Where to write the metamodel (JSON).
     #[arg(long)]
     pub out: PathBuf,
@@ -62,6 +76,23 @@ impl Observer for Terminal {
     }
 }
 
+/// The wind speeds the design must cover, from either option.
+fn coverage(args: &CalibrateArgs) -> Result<Option<WindCoverage>> {
+    if let Some(text) = &args.cover_climate {
+        let climate: ClimateSpec =
+            serde_json::from_str(text).map_err(|e| Error::invalid("cover_climate", e.to_string()))?;
+        let request = ClimateCoverage { climate, annual_probability: args.cover_annual_probability };
+        return request.wind_speeds("cover_climate").map(Some);
+    }
+    let Some(text) = &args.cover_wind_speeds else { return Ok(None) };
+    let bad = || Error::invalid("cover_wind_speeds", format!("expected LOWER:UPPER in m/s, got `{text}`"));
+    let (lower, upper) = text.split_once(':').ok_or_else(bad)?;
+    let speed = |s: &str| s.trim().parse::<f64>().map_err(|_| bad());
+    let coverage = WindCoverage { lower: speed(lower)?, upper: speed(upper)? };
+    coverage.validate()?;
+    Ok(Some(coverage))
+}
+
 pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
     let problem = args.problem.problem()?;
     let mut options = CalibrationOptions { experiments: args.experiments, seed: args.seed, ..Default::default() };
@@ -71,6 +102,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
         RefinementChoice::None => Refinement::None,
     };
     options.narx.cross_terms = args.cross_terms;
+    options.cover_wind_speeds = coverage(args)?;
     let observer = Terminal { started: Instant::now(), last: Mutex::new(String::new()) };
     let metamodel = run_calibration(&problem, &options, &observer)?;
     let json = serde_json::to_string(&metamodel).expect("a metamodel serialises");
@@ -88,6 +120,12 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
         c.seconds.coefficients,
         c.seconds.expansion
     );
+    if let Some(coverage) = options.cover_wind_speeds {
+        out += &format!(
+            "design covers wind speeds {:.1}-{:.1} m/s (half the experiments), fits weighted to the input model\n",
+            coverage.lower, coverage.upper
+        );
+    }
     for d in &c.modes {
         out += &format!(
             "mode {}: terms {{{}}}, calibration mean relative error NARX {:.2e}, PC-NARX {:.2e}, PCE terms {:?}, worst LOO {:.1e}{}\n",

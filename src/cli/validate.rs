@@ -4,6 +4,7 @@ use super::read_metamodel;
 use crate::analysis::{validate as run_validation, validation_svg};
 use crate::error::{Error, Result};
 use crate::surrogate::{Observer, Progress};
+use crate::uncertainty::parse_assignment;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -18,6 +19,10 @@ pub struct ValidateArgs {
     pub samples: usize,
     #[arg(long, default_value_t = 1000)]
     pub seed: u64,
+    /// Hold an input at a value, e.g. --fix wind_speed=60 to validate at the end of a calibrated
+    /// range (repeatable).
+    #[arg(long = "fix", value_name = "NAME=VALUE")]
+    pub fix: Vec<String>,
     /// Print the whole report as JSON.
     #[arg(long)]
     pub json: bool,
@@ -43,7 +48,12 @@ impl Observer for Counter {
 
 pub fn validate(args: &ValidateArgs) -> Result<String> {
     let (metamodel, problem) = read_metamodel(&args.model)?;
-    let report = run_validation(&metamodel, &problem, args.samples, args.seed, &Counter(Instant::now()))?;
+    let mut inputs = problem.inputs.clone();
+    for assignment in &args.fix {
+        let (name, value) = parse_assignment(assignment)?;
+        inputs = inputs.with_fixed(&name, value)?;
+    }
+    let report = run_validation(&metamodel, &problem, &inputs, args.samples, args.seed, &Counter(Instant::now()))?;
     let json = serde_json::to_string_pretty(&report).expect("a report serialises");
     if let Some(path) = &args.out {
         std::fs::write(path, &json).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
@@ -61,7 +71,7 @@ pub fn validate(args: &ValidateArgs) -> Result<String> {
     }
     let modes: Vec<String> = report.mode_mean_relative_errors.iter().map(|e| format!("{e:.2e}")).collect();
     Ok(format!(
-        "{} on {} fresh samples (seed {})\n\
+        "{} on {} fresh samples (seed {}){}\n\
          peak roof displacement: correlation {:.4}, median relative error {:.2} %, 95th percentile {:.2} %\n\
          mean relative error, full PC-NARX: roof {:.2e}, modes [{}]\n\
          calibration mean relative error (NARX, mean over modes): {:.2e}\n\
@@ -70,6 +80,7 @@ pub fn validate(args: &ValidateArgs) -> Result<String> {
         problem.name,
         report.samples,
         report.seed,
+        report.fixed.iter().map(|(name, value)| format!(", {name} held at {value}")).collect::<String>(),
         report.peak_correlation,
         100.0 * report.median_peak_relative_error,
         100.0 * report.p95_peak_relative_error,

@@ -12,6 +12,7 @@ use crate::error::{Error, Result, require_finite};
 use crate::problem::Problem;
 use crate::structure::MAX_FLOORS;
 use crate::surrogate::{Metamodel, Observer, Progress};
+use crate::uncertainty::InputModel;
 use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -112,19 +113,25 @@ impl ExceedanceRequest {
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
         let response = response_of(self.floor, self.response, problem);
-        let mut inputs = problem.inputs.clone();
-        for (name, value) in &self.fixed {
-            let speed = if name == "wind_speed" { WindLoads::check_speed(*value) } else { Ok(()) };
-            inputs = speed.and_then(|()| inputs.with_fixed(name, *value)).map_err(|error| match error {
-                Error::Invalid { reason, .. } => Error::invalid(format!("fixed.{name}"), reason),
-                other => other,
-            })?;
-        }
+        let inputs = held_inputs(problem, &self.fixed)?;
         let peaks = metamodel_peaks(metamodel, problem, &inputs, self.samples, self.seed, response, observer)?;
         let thresholds = self.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
         let curve = exceedance_curve(&peaks, &thresholds, self.confidence);
         Ok(ExceedanceAnswer { curve, response, metamodel_id: metamodel_id.to_string() })
     }
+}
+
+/// The study's input model with the `fixed` inputs held; errors name `fixed.<input>`.
+pub fn held_inputs(problem: &Problem, fixed: &BTreeMap<String, f64>) -> Result<InputModel> {
+    let mut inputs = problem.inputs.clone();
+    for (name, value) in fixed {
+        let speed = if name == "wind_speed" { WindLoads::check_speed(*value) } else { Ok(()) };
+        inputs = speed.and_then(|()| inputs.with_fixed(name, *value)).map_err(|error| match error {
+            Error::Invalid { reason, .. } => Error::invalid(format!("fixed.{name}"), reason),
+            other => other,
+        })?;
+    }
+    Ok(inputs)
 }
 
 /// An exceedance curve of a metamodel's sampled peaks, with its band.

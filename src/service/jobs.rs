@@ -9,7 +9,7 @@
 //! new jobs. Validations and exceedance requests run whole on the worker that claimed them.
 
 use super::analyses::AnalysisJob;
-use super::exceedance::ExceedanceJob;
+use super::exceedance::{ExceedanceJob, held_inputs};
 use super::lease::LeaseKeeper;
 use super::store::{Store, TaskRow};
 use super::{AppState, CalibrationRequest, ValidationJob};
@@ -216,7 +216,8 @@ async fn prepare(
             let job: ValidationJob = parse(request)?;
             let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
-                let report = validate(&metamodel, &problem, job.samples, job.seed, supervision.as_ref())?;
+                let inputs = held_inputs(&problem, &job.fixed)?;
+                let report = validate(&metamodel, &problem, &inputs, job.samples, job.seed, supervision.as_ref())?;
                 Ok((JobOutput::Answer(serde_json::to_string(&report).expect("a report serialises")), problem.name))
             })))
         }

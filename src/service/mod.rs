@@ -17,10 +17,11 @@ pub use routes::{openapi, openapi_for};
 #[cfg(any(test, feature = "test-support"))]
 pub use store::testing;
 
+use crate::analysis::ClimateCoverage;
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
 use crate::structure::CustomStructure;
-use crate::surrogate::{CalibrationCost, CalibrationOptions, Refinement};
+use crate::surrogate::{CalibrationCost, CalibrationOptions, Refinement, WindCoverage, design};
 use crate::uncertainty::Marginal;
 use crate::wind::WindSite;
 use cache::{Loaded, LoadedMetamodels};
@@ -94,6 +95,12 @@ pub struct CalibrationRequest {
     pub narx: Option<crate::surrogate::narx::NarxOptions>,
     pub pce: Option<crate::surrogate::pce::PceOptions>,
     pub refinement: Option<Refinement>,
+    /// Wind speeds (m/s) the design must cover beyond the input model's spread: half the
+    /// experiments spread evenly over them, the fits weighted so the expansions stay the input
+    /// model's. At most one of this and `cover_climate`.
+    pub cover_wind_speeds: Option<WindCoverage>,
+    /// Cover a climate: from its median annual maximum speed to its speed of `annual_probability`.
+    pub cover_climate: Option<ClimateCoverage>,
 }
 
 impl CalibrationRequest {
@@ -122,9 +129,20 @@ impl CalibrationRequest {
             narx: self.narx.clone().unwrap_or(defaults.narx),
             pce: self.pce.clone().unwrap_or(defaults.pce),
             refinement: self.refinement.unwrap_or(defaults.refinement),
+            cover_wind_speeds: match (&self.cover_wind_speeds, &self.cover_climate) {
+                (Some(_), Some(_)) => {
+                    return Err(Error::invalid("cover_climate", "give cover_wind_speeds or cover_climate, not both"));
+                }
+                (Some(speeds), None) => Some(*speeds),
+                (None, Some(climate)) => Some(climate.wind_speeds("cover_climate")?),
+                (None, None) => None,
+            },
             ..defaults
         };
         options.validate()?;
+        if options.cover_wind_speeds.is_some() {
+            design(&problem, &options)?; // the range inside the wind speed's support
+        }
         if options.experiments > config.max_experiments {
             return Err(Error::invalid("experiments", format!("at most {} on this server", config.max_experiments)));
         }
@@ -145,11 +163,14 @@ pub struct ValidationRequest {
     #[schema(default = 1000)]
     #[serde(deserialize_with = "crate::whole::seed")]
     pub seed: u64,
+    /// Inputs held, by name: `{"wind_speed": 60}` validates at one end of a calibrated range.
+    #[schema(schema_with = schema::fixed_inputs_schema)]
+    pub fixed: BTreeMap<String, f64>,
 }
 
 impl Default for ValidationRequest {
     fn default() -> Self {
-        ValidationRequest { samples: 200, seed: 1000 }
+        ValidationRequest { samples: 200, seed: 1000, fixed: BTreeMap::new() }
     }
 }
 
@@ -159,6 +180,8 @@ pub struct ValidationJob {
     pub metamodel_id: String,
     pub samples: usize,
     pub seed: u64,
+    #[serde(default)]
+    pub fixed: BTreeMap<String, f64>,
 }
 
 /// Most samples a validation job may ask for (each is one reference storm).

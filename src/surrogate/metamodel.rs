@@ -158,7 +158,7 @@ impl Metamodel {
     /// the expansions were fitted, beyond which they extrapolate.
     pub fn calibrated_range(&self, problem: &Problem, name: &str) -> Result<[f64; 2]> {
         let index = problem.inputs.index_of(name)?;
-        let design = super::phases::design(problem, &self.calibration.options);
+        let design = super::design(problem, &self.calibration.options)?.points;
         let values = design.iter().map(|x| x[index]);
         Ok([values.clone().fold(f64::INFINITY, f64::min), values.fold(f64::NEG_INFINITY, f64::max)])
     }

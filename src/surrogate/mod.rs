@@ -4,6 +4,7 @@
 pub mod batch;
 mod calibrate;
 mod cost;
+mod design;
 pub mod identify;
 mod lanes;
 pub mod lars;
@@ -19,6 +20,7 @@ mod refine;
 pub use batch::Workspace as BatchWorkspace;
 pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};
+pub use design::{Design, WindCoverage, design};
 pub use lanes::LANES;
 pub use metamodel::{
     CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds, StaticResponse,

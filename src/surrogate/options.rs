@@ -2,6 +2,7 @@
 //! dictionary, the expansions, the refinement, with the paper's values as defaults.
 
 use super::Parametrization;
+use super::design::WindCoverage;
 use super::narx::NarxOptions;
 use super::pce::PceOptions;
 use super::refine::Refinement;
@@ -26,6 +27,9 @@ pub struct CalibrationOptions {
     pub wind: WindPath,
     /// What the expansions are of; by default the stable gains whenever the experiments admit them.
     pub parametrization: Option<Parametrization>,
+    /// Wind speeds the design must cover beyond the input model's own spread, e.g. up to a
+    /// climate's 100 000-year speed; the fits are weighted so the expansions stay the input model's.
+    pub cover_wind_speeds: Option<WindCoverage>,
 }
 
 impl Default for CalibrationOptions {
@@ -39,6 +43,7 @@ impl Default for CalibrationOptions {
             selection_experiments: 20,
             wind: WindPath::Modal,
             parametrization: None,
+            cover_wind_speeds: None,
         }
     }
 }
@@ -58,6 +63,9 @@ impl CalibrationOptions {
             return Err(Error::invalid("selection_experiments", "must be at least 1"));
         }
         self.narx.validate()?;
+        if let Some(coverage) = &self.cover_wind_speeds {
+            coverage.validate()?;
+        }
         self.pce.validate()
     }
 }

@@ -12,6 +12,7 @@
 //! 4 MB); every other experiment is reduced to its coefficients as soon as it has run.
 
 use super::Parametrization;
+use super::design::design;
 use super::identify::{Record, StructureChoice, least_squares, select_structure, simulate};
 use super::metamodel::{
     CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds,
@@ -26,7 +27,6 @@ use crate::cancel::Cancel;
 use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::uncertainty::{latin_hypercube, rng_from_seed};
 use crate::wind::Workspace;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
@@ -170,19 +170,13 @@ pub struct Planned {
     pub seconds: StageSeconds,
 }
 
-/// The calibration's Latin-hypercube design: a function of the input model, the number of
-/// experiments and the seed alone, so a stored metamodel can say where it was calibrated.
-pub fn design(problem: &Problem, options: &CalibrationOptions) -> Vec<Vec<f64>> {
-    latin_hypercube(&problem.inputs, options.experiments, &mut rng_from_seed(options.seed))
-}
-
 /// Phase 1: the design, the selection experiments through the reference (in parallel), the
 /// deviations' scales and every mode's structure.
 pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
     options.validate()?;
     let cancel = || observer.cancelled();
     let started = Instant::now();
-    let design = design(problem, options);
+    let design = design(problem, options)?.points;
     let k = design.len();
     let stride = (k as f64 / options.selection_experiments.min(k) as f64).max(1.0);
     let selection: Vec<usize> =
@@ -281,6 +275,10 @@ pub fn assemble(
         return Err(Error::Numerical("assembling needs one fit of every experiment of the design".into()));
     }
     let xi: Vec<Vec<f64>> = plan.design.iter().map(|x| problem.inputs.to_standard(x)).collect();
+    let weights = design(problem, options)?.weights;
+    if weights.len() != xi.len() {
+        return Err(Error::Numerical("the plan's design is not the options' design".into()));
+    }
     let modes = plan.structures.len();
     let selection_records: Vec<Vec<Record>> =
         planned.selection.iter().map(|e| e.records(&plan.scales, coupled(options, modes))).collect();
@@ -303,7 +301,7 @@ pub fn assemble(
             .collect();
         let static_response = StaticResponse {
             per_unit_mean_load,
-            expansion: SparsePce::fit(&problem.inputs, &xi, &static_targets, &options.pce, &cancel)?,
+            expansion: SparsePce::fit(&problem.inputs, &xi, &static_targets, &weights, &options.pce, &cancel)?,
         };
         let thetas: Vec<Vec<f64>> = fits.iter().map(|f| f.coefficients[mode].clone()).collect();
         let parametrization = options.parametrization.unwrap_or_else(|| Parametrization::choose(&terms, &thetas));
@@ -312,7 +310,7 @@ pub fn assemble(
             .into_par_iter()
             .map(|i| {
                 let targets: Vec<f64> = expanded.iter().map(|phi| phi[i]).collect();
-                SparsePce::fit(&problem.inputs, &xi, &targets, &options.pce, &cancel)
+                SparsePce::fit(&problem.inputs, &xi, &targets, &weights, &options.pce, &cancel)
             })
             .collect::<Result<_>>()?;
 

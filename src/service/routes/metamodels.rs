@@ -4,6 +4,7 @@ use super::sampling::{Queued, Work, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
 use crate::problem::Problem;
 use crate::service::error::{ApiError, ProblemDetails};
+use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
 use crate::service::routes::operations::{Operation, OperationKind};
 use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
@@ -202,7 +203,8 @@ async fn start_validation(
         )
         .into());
     }
-    let queued = ValidationJob { metamodel_id: id, samples: request.samples, seed: request.seed };
+    held_inputs(&loaded.1, &request.fixed)?;
+    let queued = ValidationJob { metamodel_id: id, samples: request.samples, seed: request.seed, fixed: request.fixed };
     let text = serde_json::to_string(&queued).expect("a job serialises");
     accept_job(&state, &headers, "validations", OperationKind::Validation, text).await
 }
