@@ -73,6 +73,16 @@ async fn calibrate_follow_fetch_and_sample() {
         .await
         .unwrap();
     assert!(svg.text().await.unwrap().starts_with("<svg"));
+    // The responses from the equations of motion, and a damper response where there is no damper.
+    for response in ["acceleration", "damper_force", "damper_stroke"] {
+        let (status, curve) = app.post_json(&path, json!({"samples": 8, "response": response, "floor": 32})).await;
+        assert_eq!(status, 200, "{response}: {curve}");
+        assert_eq!(curve["response"]["kind"], response);
+        assert!(curve["thresholds"].as_array().unwrap().iter().all(|x| x.as_f64().unwrap() > 0.0), "{curve}");
+    }
+    let (s, ct, body) =
+        problem(app.post(&path, json!({"samples": 8, "response": "damper_force", "floor": 99})).await).await;
+    assert_problem(s, &ct, &body, 422, "floor");
     // The same request as an operation (what larger requests become).
     let queued = app
         .client

@@ -3,7 +3,7 @@
 
 use faer::Mat;
 use windmeta::cancel::Never;
-use windmeta::dynamics::{Dampers, FullSystem, integrate_full, integrate_reduced};
+use windmeta::dynamics::{Dampers, FullSystem, SampleModel, integrate_full, integrate_reduced};
 use windmeta::problem::Problem;
 use windmeta::structure::Modes;
 use windmeta::uncertainty::rng_from_seed;
@@ -195,4 +195,57 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
     // 1 % (measured 0.16 %).
     assert!(sd(&diff) < 0.01 * sd(&full), "dynamic difference sd {} vs response sd {}", sd(&diff), sd(&full));
     assert!((peak(&reduced) / peak(&full) - 1.0).abs() < 0.01, "peaks {} vs {}", peak(&reduced), peak(&full));
+}
+
+/// Accelerations from the equations of motion (`SampleModel`) on the integrator's displacements
+/// and velocities: on a harmonically loaded oscillator they are the closed form's second
+/// derivative (taken by a central difference with h = 10⁻⁴ s: error ~10⁻⁸) to the load's linear
+/// interpolation, 10⁻⁴ of the amplitude at ΩΔt = 0.03.
+#[test]
+fn accelerations_from_the_equations_of_motion_match_the_closed_form() {
+    let (omega, zeta, mass, force, forcing) = (4.0, 0.02, 1.0e6, 5.0e4, 3.0);
+    let dt = 0.01;
+    let steps = 3001;
+    let load: Vec<f64> = (0..steps).map(|i| force * (forcing * i as f64 * dt).sin()).collect();
+    let forces = ModalForces { mean: vec![0.0], series: vec![load] };
+    let modes = oscillator(omega, mass);
+    let dampers = no_dampers();
+    let motion = integrate_reduced(&modes, zeta, &dampers, &forces, dt, &Never).unwrap().motion();
+    let accelerations = SampleModel::new(&modes, zeta, &dampers).modal_accelerations(&motion, &forces).remove(0);
+    let exact = |t: f64| harmonic_from_rest(t, omega, zeta, force / (mass * omega * omega), forcing);
+    let h = 1e-4;
+    let amplitude = force / mass / ((1.0 - (forcing / omega).powi(2)).powi(2)).sqrt() * (forcing / omega).powi(2);
+    for (i, a) in accelerations.iter().enumerate().skip(1) {
+        let t = i as f64 * dt;
+        let second = (exact(t + h) - 2.0 * exact(t) + exact(t - h)) / (h * h);
+        assert!((a - second).abs() < 1e-3 * amplitude, "t = {t}: {a} vs {second}");
+    }
+}
+
+/// On a storm with the dampers acting, the roof acceleration from the equations of motion equals
+/// the second central difference of the integrator's roof displacement to (ωΔt)²/12 of the third
+/// mode (4·10⁻³), and the damper forces from the law on the integrator's velocities are finite and
+/// act on every storey.
+#[test]
+fn storm_accelerations_agree_with_the_displacement_history() {
+    let problem = Problem::preset("frame40-kn").unwrap().with_storm(60.0, 0.01).unwrap();
+    let x = problem.inputs.means();
+    let p = problem.parameters(&x).unwrap();
+    let forces = problem.modal_forces(&p, windmeta::problem::WindPath::Modal, &mut rng_from_seed(3)).unwrap();
+    let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p).unwrap());
+    let motion = integrate_reduced(&modes, p.damping_ratio, &dampers, &forces, 0.01, &Never).unwrap().motion();
+    let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
+    let accelerations = model.modal_accelerations(&motion, &forces);
+    let roof: Vec<f64> =
+        (0..motion.displacements[0].len()).map(|t| motion.displacements.iter().map(|y| y[t]).sum()).collect();
+    let roof_acceleration: Vec<f64> = (0..roof.len()).map(|t| accelerations.iter().map(|a| a[t]).sum()).collect();
+    let peak = roof_acceleration.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+    let worst = (1..roof.len() - 1)
+        .map(|t| ((roof[t + 1] - 2.0 * roof[t] + roof[t - 1]) / 1e-4 - roof_acceleration[t]).abs())
+        .fold(0.0, f64::max);
+    assert!(peak > 0.01 && worst < 1e-2 * peak, "worst difference {worst} against a peak of {peak} m/s²");
+    for d in 0..model.dampers() {
+        let force = model.damper_force_peak(d, &motion);
+        assert!(force.is_finite() && force > 0.0, "damper {d}: {force}");
+    }
 }

@@ -52,6 +52,12 @@ fn validation_on_fresh_samples_meets_the_targets() {
     assert!(report.median_peak_relative_error < 0.02, "median peak error {}", report.median_peak_relative_error);
     assert_eq!(report.reference_peak.len(), 16);
     assert!(report.max_exceedance_gap <= 0.25, "gap {}", report.max_exceedance_gap);
+    // Every checked response, the equations-of-motion ones included (full-size targets: 0.97, 5 %).
+    let kinds: Vec<&str> = report.responses.iter().map(|r| r.response.as_str()).collect();
+    assert_eq!(kinds, ["displacement", "drift", "acceleration", "damper_force"]);
+    for r in &report.responses {
+        assert!(r.peak_correlation > 0.95 && r.median_peak_relative_error < 0.1, "{r:?}");
+    }
 }
 
 #[test]
@@ -215,7 +221,10 @@ fn batched_peaks_equal_the_peaks_of_the_histories() {
         for (k, (x, peak)) in xs.iter().zip(&peaks).enumerate() {
             let (_, coarse) = problem.sample_storm(x, WindPath::Modal, 3, k, &mut Workspace::default()).unwrap();
             let histories = metamodel.predict(problem, x, &coarse.on_grid(&problem.storm)).unwrap();
-            let expected = response.peak(&metamodel.modes.shapes, &histories);
+            let weights = response.modal_weights(&metamodel.modes.shapes, &problem.structure).unwrap().unwrap();
+            let expected = (0..histories[0].len())
+                .map(|t| histories.iter().zip(&weights).map(|(y, w)| w * y[t]).sum::<f64>().abs())
+                .fold(0.0, f64::max);
             assert!((peak - expected).abs() <= 1e-12 * expected, "sample {k}: {peak} vs {expected}");
         }
     }
@@ -242,4 +251,34 @@ fn a_covering_calibration_is_calibrated_and_valid_at_its_upper_end() {
     assert_eq!(report.fixed.get("wind_speed"), Some(&60.0));
     assert!(report.peak_correlation > 0.95, "peak correlation {}", report.peak_correlation);
     assert!(report.median_peak_relative_error < 0.02, "median peak error {}", report.median_peak_relative_error);
+}
+
+/// Every response can be sampled: the stroke of a damper is cos θ times the drift of its storey,
+/// peak for peak; accelerations and damper forces (through the equations of motion) are positive
+/// and grow with the wind; a damper response where there is no damper, or a floor beyond the roof,
+/// is refused naming the floor.
+#[test]
+fn every_response_is_sampled() {
+    let (metamodel, problem) = calibrated();
+    let peaks = |response: Response, v: f64| {
+        let inputs = problem.inputs.clone().with_fixed("wind_speed", v).unwrap();
+        metamodel_peaks(metamodel, problem, &inputs, 6, 3, response, &Silent).unwrap()
+    };
+    let cos = problem.structure.dampers[31].cos_angle;
+    let (drift, stroke) =
+        (peaks(Response::Drift { floor: 32 }, 30.0), peaks(Response::DamperStroke { floor: 32 }, 30.0));
+    for (d, s) in drift.iter().zip(&stroke) {
+        assert!((s - cos * d).abs() <= 1e-12 * s, "{s} vs {cos}·{d}");
+    }
+    for response in [Response::Acceleration { floor: 40 }, Response::DamperForce { floor: 32 }] {
+        let (light, strong) = (peaks(response, 25.0), peaks(response, 35.0));
+        let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+        assert!(light.iter().all(|p| p.is_finite() && *p > 0.0), "{response:?}: {light:?}");
+        assert!(mean(&strong) > mean(&light), "{response:?}: {light:?} then {strong:?}");
+    }
+    let mut bare = problem.clone();
+    bare.structure.dampers.clear();
+    let error = Response::DamperForce { floor: 3 }.check(&bare.structure).unwrap_err().to_string();
+    assert!(error.contains("floor") && error.contains("no damper"), "{error}");
+    assert!(Response::Acceleration { floor: 41 }.check(&problem.structure).is_err());
 }

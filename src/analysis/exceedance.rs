@@ -1,7 +1,8 @@
 //! Exceedance curves of peak responses: P(peak > x) over a threshold grid, with exact binomial
 //! (Clopper-Pearson) confidence bands, and the metamodel sampling that feeds them.
 
-use super::Response;
+use super::{Response, ResponseView};
+use crate::dynamics::{ModalMotion, SampleModel};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::{BatchWorkspace, LANES, Metamodel, Observer, Progress};
@@ -164,9 +165,10 @@ pub enum OnDivergence {
 pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observer: &dyn Observer) -> Result<Vec<f64>> {
     let Draws { problem, rows, storms, seed, on_divergence } = *draws;
     assert_eq!(rows.len(), storms.len(), "one storm per row");
-    response.check(problem.structure.floors())?;
     let path = metamodel.calibration.options.wind;
-    let weights = response.weights(&metamodel.modes.shapes);
+    let Some(weights) = response.modal_weights(&metamodel.modes.shapes, &problem.structure)? else {
+        return peaks_by_motion(metamodel, draws, response, observer);
+    };
     let (done, total) = (AtomicUsize::new(0), rows.len());
     let peaks: Vec<Vec<f64>> = rows
         .par_chunks(LANES)
@@ -204,6 +206,44 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
         )
         .collect::<Result<_>>()?;
     Ok(peaks.concat())
+}
+
+/// Peaks of a response that needs the equations of motion (acceleration, damper force): each
+/// sample's predicted modal histories on the storm grid, their velocities, then the response.
+fn peaks_by_motion(
+    metamodel: &Metamodel,
+    draws: &Draws,
+    response: Response,
+    observer: &dyn Observer,
+) -> Result<Vec<f64>> {
+    let Draws { problem, rows, storms, seed, on_divergence } = *draws;
+    let path = metamodel.calibration.options.wind;
+    let (done, total) = (AtomicUsize::new(0), rows.len());
+    rows.par_iter()
+        .zip(storms)
+        .map_init(wind::Workspace::default, |workspace, (x, &k)| {
+            if observer.cancelled() {
+                return Err(Error::Cancelled);
+            }
+            let (p, coarse) = problem.sample_storm(x, path, seed, k, workspace)?;
+            let forces = coarse.on_grid(&problem.storm);
+            let predicted = match (metamodel.predict(problem, x, &forces), on_divergence) {
+                (Ok(predicted), _) => predicted,
+                (Err(Error::Numerical(_)), OnDivergence::Exceed) => return Ok(f64::INFINITY),
+                (Err(Error::Numerical(e)), OnDivergence::Fail) => {
+                    return Err(Error::Numerical(format!("sample {k}: {e}")));
+                }
+                (Err(e), _) => return Err(e),
+            };
+            let motion = ModalMotion::from_displacements(predicted, problem.storm.time_step);
+            let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p)?);
+            let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
+            let view = ResponseView::new(&metamodel.modes.shapes, &problem.structure, &motion, &model, &forces);
+            let peak = response.peak(&view)?;
+            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
+            Ok(peak)
+        })
+        .collect()
 }
 
 #[cfg(test)]

@@ -213,7 +213,7 @@ pub fn metamodel_fragility(
     options: &FragilityOptions,
     observer: &dyn Observer,
 ) -> Result<Fragility> {
-    response.check(problem.structure.floors())?;
+    response.check(&problem.structure)?;
     let calibrated = metamodel.calibrated_range(problem, WIND_SPEED)?;
     fragility(&problem.inputs, options, calibrated, |rows, storms| {
         let draws = Draws { problem, rows, storms, seed: options.seed, on_divergence: OnDivergence::Exceed };

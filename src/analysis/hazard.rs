@@ -283,7 +283,7 @@ pub fn metamodel_hazard(
     options: &HazardOptions,
     observer: &dyn Observer,
 ) -> Result<HazardCurve> {
-    response.check(problem.structure.floors())?;
+    response.check(&problem.structure)?;
     let calibrated = metamodel.calibrated_range(problem, WIND_SPEED)?;
     hazard_curve(&problem.inputs, options, calibrated, |rows, first| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();

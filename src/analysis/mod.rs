@@ -2,6 +2,7 @@
 //! annual curves and return levels under a wind climate, fragility curves, Sobol indices, and the
 //! validation of a metamodel against the reference.
 
+mod checked;
 mod climate;
 mod exceedance;
 mod fragility;
@@ -13,6 +14,7 @@ mod sobol;
 mod strata;
 mod validation;
 
+pub use checked::ResponseValidation;
 pub use climate::{ClimateCoverage, ClimateSpec};
 pub use exceedance::{
     Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD_M, MAX_THRESHOLDS, OnDivergence, automatic_thresholds,
@@ -25,9 +27,9 @@ pub use hazard::{
     DEFAULT_RETURN_PERIODS, HazardCurve, HazardOptions, MAX_RETURN_PERIOD, Reliability, ReturnLevel, WIND_SPEED,
     hazard_curve, metamodel_hazard,
 };
-pub use peaks::{PeakSummary, quantile};
+pub use peaks::{PeakSummary, pearson, quantile};
 pub use plot::{exceedance_svg, fragility_svg, hazard_svg, validation_svg};
-pub use response::Response;
+pub use response::{RESPONSE_KINDS, Response, ResponseView, STANDARD_GRAVITY};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;
 pub use validation::{ValidationReport, validate};

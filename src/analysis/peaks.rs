@@ -30,6 +30,16 @@ impl PeakSummary {
     }
 }
 
+/// Pearson's correlation of two equally long samples.
+pub fn pearson(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len() as f64;
+    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
+    let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
+    let va: f64 = a.iter().map(|x| (x - ma).powi(2)).sum();
+    let vb: f64 = b.iter().map(|y| (y - mb).powi(2)).sum();
+    cov / (va * vb).sqrt()
+}
+
 /// Quantile of sorted data by linear interpolation between order statistics (Hyndman-Fan type 7,
 /// the default of R and NumPy).
 pub fn quantile(sorted: &[f64], p: f64) -> f64 {

@@ -164,7 +164,7 @@ pub fn metamodel_sensitivity(
     confidence: f64,
     observer: &dyn Observer,
 ) -> Result<Sensitivity> {
-    response.check(problem.structure.floors())?;
+    response.check(&problem.structure)?;
     sobol_indices(&problem.inputs, samples, seed, confidence, |rows, storms| {
         peaks_at(
             metamodel,

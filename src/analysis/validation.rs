@@ -2,9 +2,11 @@
 //! 4.3.2): the same inputs and the same storm through both, then errors, peak correlation (Fig. 6)
 //! and the exceedance curves of the peaks (Fig. 7).
 
+use super::checked::{CheckedPeaks, ResponseValidation, compare};
 use super::exceedance::{ExceedanceCurve, automatic_thresholds, exceedance_curve, max_exceedance_gap};
-use super::{Response, quantile};
-use crate::dynamics::integrate_reduced;
+use super::response::ResponseView;
+use super::{Response, pearson, quantile};
+use crate::dynamics::{ModalMotion, SampleModel, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::narx::relative_error;
@@ -39,6 +41,10 @@ pub struct ValidationReport {
     pub p95_peak_relative_error: f64,
     /// From the calibration: NARX-only mean relative error, mean over modes.
     pub calibration_mean_relative_error: f64,
+    /// Per checked response (roof displacement, largest drift, roof acceleration, largest damper
+    /// force): correlation, median and 95th-percentile relative error, exceedance-curve gap.
+    #[serde(default)]
+    pub responses: Vec<ResponseValidation>,
     /// Largest vertical gap between the two empirical exceedance curves of the roof peak.
     pub max_exceedance_gap: f64,
     pub reference_exceedance: ExceedanceCurve,
@@ -50,18 +56,9 @@ pub struct ValidationReport {
     pub metamodel_seconds_per_sample: f64,
 }
 
-fn pearson(a: &[f64], b: &[f64]) -> f64 {
-    let n = a.len() as f64;
-    let (ma, mb) = (a.iter().sum::<f64>() / n, b.iter().sum::<f64>() / n);
-    let cov: f64 = a.iter().zip(b).map(|(x, y)| (x - ma) * (y - mb)).sum();
-    let va: f64 = a.iter().map(|x| (x - ma).powi(2)).sum();
-    let vb: f64 = b.iter().map(|y| (y - mb).powi(2)).sum();
-    cov / (va * vb).sqrt()
-}
-
 struct SampleResult {
-    reference_peak: f64,
-    metamodel_peak: f64,
+    reference: CheckedPeaks,
+    metamodel: CheckedPeaks,
     roof_error: f64,
     mode_errors: Vec<f64>,
     reference_seconds: f64,
@@ -108,40 +105,47 @@ pub fn validate(
             }
             let (p, coarse) = problem.sample_storm(x, path, seed, k, workspace)?;
             let forces = coarse.on_grid(&problem.storm);
+            let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p)?);
             let started = Instant::now();
-            let reference = integrate_reduced(
-                &problem.sample_modes(&p),
-                p.damping_ratio,
-                &problem.dampers(&p)?,
-                &forces,
-                problem.storm.time_step,
-                &|| observer.cancelled(),
-            )?;
+            let reference =
+                integrate_reduced(&modes, p.damping_ratio, &dampers, &forces, problem.storm.time_step, &|| {
+                    observer.cancelled()
+                })?;
             let reference_seconds = started.elapsed().as_secs_f64();
             let started = Instant::now();
             let predicted = metamodel
                 .predict(problem, x, &forces)
                 .map_err(|e| Error::Numerical(format!("validation sample {k}: {e}")))?;
             let metamodel_seconds = started.elapsed().as_secs_f64();
-            let mode_errors =
+            let mode_errors: Vec<f64> =
                 reference.displacements.iter().zip(&predicted).map(|(y, y_hat)| relative_error(y, y_hat)).collect();
-            let (u, u_hat) = (roof.history(shapes, &reference.displacements), roof.history(shapes, &predicted));
-            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });
-            Ok(SampleResult {
-                reference_peak: u.iter().fold(0.0, |m, v| m.max(v.abs())),
-                metamodel_peak: u_hat.iter().fold(0.0, |m, v| m.max(v.abs())),
+            let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
+            let reference = reference.motion();
+            let predicted = ModalMotion::from_displacements(predicted, problem.storm.time_step);
+            let structure = &problem.structure;
+            let reference_view = ResponseView::new(shapes, structure, &reference, &model, &forces);
+            let metamodel_view = ResponseView::new(shapes, structure, &predicted, &model, &forces);
+            let (u, u_hat) = (roof.history(&reference_view)?, roof.history(&metamodel_view)?);
+            let result = SampleResult {
+                reference: CheckedPeaks::of(&reference_view)?,
+                metamodel: CheckedPeaks::of(&metamodel_view)?,
                 roof_error: relative_error(&u, &u_hat),
                 mode_errors,
                 reference_seconds,
                 metamodel_seconds,
-            })
+            };
+            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });
+            Ok(result)
         })
         .collect::<Result<_>>()?;
     let n = results.len() as f64;
-    let reference_peak: Vec<f64> = results.iter().map(|r| r.reference_peak).collect();
-    let metamodel_peak: Vec<f64> = results.iter().map(|r| r.metamodel_peak).collect();
+    let reference: Vec<CheckedPeaks> = results.iter().map(|r| r.reference.clone()).collect();
+    let metamodel_peaks: Vec<CheckedPeaks> = results.iter().map(|r| r.metamodel.clone()).collect();
+    let responses = compare(&reference, &metamodel_peaks);
+    let reference_peak: Vec<f64> = reference.iter().map(CheckedPeaks::roof_displacement).collect();
+    let metamodel_peak: Vec<f64> = metamodel_peaks.iter().map(CheckedPeaks::roof_displacement).collect();
     let mut peak_errors: Vec<f64> =
-        results.iter().map(|r| (r.metamodel_peak - r.reference_peak).abs() / r.reference_peak).collect();
+        reference_peak.iter().zip(&metamodel_peak).map(|(r, m)| (m - r).abs() / r).collect();
     peak_errors.sort_by(f64::total_cmp);
     let modes = metamodel.models.len();
     let median = |mut v: Vec<f64>| {
@@ -162,6 +166,7 @@ pub fn validate(
         median_peak_relative_error: quantile(&peak_errors, 0.5),
         p95_peak_relative_error: quantile(&peak_errors, 0.95),
         calibration_mean_relative_error: metamodel.calibration.narx_mean_relative_error,
+        responses,
         max_exceedance_gap: max_exceedance_gap(&reference_peak, &metamodel_peak),
         reference_exceedance: exceedance_curve(&reference_peak, &thresholds, 0.95),
         metamodel_exceedance: exceedance_curve(&metamodel_peak, &thresholds, 0.95),

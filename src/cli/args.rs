@@ -65,15 +65,22 @@ pub struct ResponseArgs {
     /// Floor of the response (default: the roof).
     #[arg(long)]
     pub floor: Option<usize>,
-    /// The inter-storey drift below the floor instead of its displacement.
+    /// The response: displacement, drift, acceleration, damper_force or damper_stroke (the
+    /// damper in the storey below the floor).
+    #[arg(long, default_value = "displacement", conflicts_with = "drift")]
+    pub response: String,
+    /// The inter-storey drift below the floor (the same as --response drift).
     #[arg(long)]
     pub drift: bool,
 }
 
 impl ResponseArgs {
-    pub fn response(&self, problem: &Problem) -> Response {
+    pub fn response(&self, problem: &Problem) -> Result<Response> {
         let floor = self.floor.unwrap_or(problem.structure.floors());
-        if self.drift { Response::Drift { floor } } else { Response::Displacement { floor } }
+        let kind = if self.drift { "drift".to_string() } else { self.response.replace('-', "_") };
+        let response = Response::of_kind(&kind, floor)?;
+        response.check(&problem.structure)?;
+        Ok(response)
     }
 }
 
@@ -88,14 +95,6 @@ pub struct AnalysisArgs {
     /// Print the answer as JSON.
     #[arg(long)]
     pub json: bool,
-}
-
-/// A human name of a response, for tables and axes.
-pub fn describe(response: Response) -> String {
-    match response {
-        Response::Displacement { floor } => format!("displacement of floor {floor}"),
-        Response::Drift { floor } => format!("drift below floor {floor}"),
-    }
 }
 
 /// The format of `--out` by its extension, one of `allowed`.

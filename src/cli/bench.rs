@@ -180,7 +180,9 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
     let modal_forces = coarse.on_grid(&p.storm);
     let modes = p.sample_modes(&params);
     let system = p.full_system(&params);
-    let weights = Response::Displacement { floor: p.structure.floors() }.weights(&metamodel.modes.shapes);
+    let weights = Response::Displacement { floor: p.structure.floors() }
+        .modal_weights(&metamodel.modes.shapes, &p.structure)?
+        .expect("a displacement is a combination of the modes");
     let batch: Vec<(usize, &[f64], &dyn ForceSource)> =
         (0..LANES).map(|k| (k, &x[..], &coarse as &dyn ForceSource)).collect();
 

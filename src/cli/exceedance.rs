@@ -1,6 +1,6 @@
 //! `windmeta exceedance`: the exceedance curve of a peak response, sampled from a metamodel.
 
-use super::args::{ResponseArgs, describe, out_format, write_out};
+use super::args::{ResponseArgs, out_format, write_out};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
@@ -52,7 +52,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     check_confidence(args.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, problem) = read_metamodel(&args.model)?;
-    let response = args.response.response(&problem);
+    let response = args.response.response(&problem)?;
     let mut inputs = problem.inputs.clone();
     if let Some(v) = args.wind_speed {
         inputs = inputs.with_fixed("wind_speed", v)?;
@@ -71,18 +71,24 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     let seconds = started.elapsed().as_secs_f64();
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
     let curve = exceedance_curve(&peaks, &thresholds, args.confidence);
-    let what = describe(response);
+    let what = response.describe();
     if let (Some(path), Some(format)) = (&args.out, format) {
         let text = match format.as_str() {
             "csv" => csv_text(&curve),
             "json" => serde_json::to_string_pretty(&json!({"response": response, "curve": curve, "seconds": seconds}))
                 .expect("plain JSON"),
-            _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x (m)")),
+            _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x ({})", response.unit())),
         };
         write_out(path, &text)?;
     }
     let mut out = format!("peak {what}: {} samples in {seconds:.2} s\n", args.samples);
-    out += &format!("{:>12}  {:>10}  {:>10}  {:>10}\n", "x (m)", "P(peak>x)", "lower", "upper");
+    out += &format!(
+        "{:>12}  {:>10}  {:>10}  {:>10}\n",
+        &format!("x ({})", response.unit()),
+        "P(peak>x)",
+        "lower",
+        "upper"
+    );
     let step = (thresholds.len() / 12).max(1);
     for i in (0..thresholds.len()).step_by(step) {
         out += &format!(

@@ -1,6 +1,6 @@
 //! `windmeta fragility`: P(peak > x | v) over a grid of storm speeds, with lognormal fits.
 
-use super::args::{AnalysisArgs, ResponseArgs, answer, describe, out_format};
+use super::args::{AnalysisArgs, ResponseArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{Fragility, FragilityOptions, MAX_WIND_SPEEDS, fragility_svg, metamodel_fragility};
@@ -62,23 +62,30 @@ pub fn fragility(args: &FragilityArgs) -> Result<String> {
         seed: args.analysis.seed,
         confidence: args.analysis.confidence,
     };
-    let response = args.response.response(&problem);
+    let response = args.response.response(&problem)?;
     let started = Instant::now();
     let result = metamodel_fragility(&metamodel, &problem, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
-    let what = describe(response);
+    let what = response.describe();
     let out = args.out.as_deref().zip(format);
     let render = |_: &str| fragility_svg(&result, &format!("peak {what}"));
-    answer(&result, args.analysis.json, out, render, || table(&result, &what, seconds))
+    answer(&result, args.analysis.json, out, render, || table(&result, &what, response.unit(), seconds))
 }
 
-fn table(result: &Fragility, what: &str, seconds: f64) -> String {
+fn table(result: &Fragility, what: &str, unit: &str, seconds: f64) -> String {
     let mut out = format!(
         "peak {what}: {} storms at each of {} speeds in {seconds:.2} s\n",
         result.samples_per_speed,
         result.wind_speeds.len()
     );
-    out += &format!("{:>10}  {:>14}  {:>22}  {:>8}  {:>16}\n", "x (m)", "median θ (m/s)", "interval", "β", "interval");
+    out += &format!(
+        "{:>10}  {:>14}  {:>22}  {:>8}  {:>16}\n",
+        &format!("x ({})", unit),
+        "median θ (m/s)",
+        "interval",
+        "β",
+        "interval"
+    );
     for c in &result.curves {
         match &c.lognormal {
             Some(f) => {

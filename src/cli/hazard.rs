@@ -1,7 +1,7 @@
 //! `windmeta hazard`: the annual exceedance curve of a peak response under a wind climate, its
 //! return levels and, at a limit, the reliability index.
 
-use super::args::{AnalysisArgs, ResponseArgs, answer, describe, out_format};
+use super::args::{AnalysisArgs, ResponseArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
@@ -71,19 +71,19 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
             SamplingArg::MonteCarlo => Sampling::MonteCarlo,
         },
     };
-    let response = args.response.response(&problem);
+    let response = args.response.response(&problem)?;
     let started = Instant::now();
     let curve = metamodel_hazard(&metamodel, &problem, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
-    let what = describe(response);
+    let what = response.describe();
     let out = args.out.as_deref().zip(format);
     let render = |format: &str| {
-        if format == "csv" { curve.csv() } else { hazard_svg(&curve, &format!("peak {what} x (m)")) }
+        if format == "csv" { curve.csv() } else { hazard_svg(&curve, &format!("peak {what} x ({})", response.unit())) }
     };
-    answer(&curve, args.analysis.json, out, render, || table(&curve, &what, seconds))
+    answer(&curve, args.analysis.json, out, render, || table(&curve, &what, response.unit(), seconds))
 }
 
-fn table(curve: &HazardCurve, what: &str, seconds: f64) -> String {
+fn table(curve: &HazardCurve, what: &str, unit: &str, seconds: f64) -> String {
     let number = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.5}"));
     let mut out = format!(
         "annual peak {what}: {} storms in {} strata ({:?}) in {seconds:.2} s\n",
@@ -91,7 +91,12 @@ fn table(curve: &HazardCurve, what: &str, seconds: f64) -> String {
     );
     out += &format!(
         "{:>10}  {:>10}  {:>10}  {:>10}  {:>6}  {:>10}\n",
-        "x (m)", "P/year", "lower", "upper", "cov", "MRI (y)"
+        &format!("x ({})", unit),
+        "P/year",
+        "lower",
+        "upper",
+        "cov",
+        "MRI (y)"
     );
     let step = (curve.thresholds.len() / 12).max(1);
     for i in (0..curve.thresholds.len()).step_by(step) {
@@ -105,7 +110,7 @@ fn table(curve: &HazardCurve, what: &str, seconds: f64) -> String {
             curve.mri_years[i].map_or("-".into(), |t| format!("{t:.4}")),
         );
     }
-    out += &format!("{:>10}  {:>10}  {:>10}  {:>10}\n", "T (years)", "x_T (m)", "lower", "upper");
+    out += &format!("{:>10}  {:>10}  {:>10}  {:>10}\n", "T (years)", &format!("x_T ({})", unit), "lower", "upper");
     for r in &curve.return_levels {
         out += &format!(
             "{:>10}  {:>10}  {:>10}  {:>10}\n",

@@ -1,6 +1,6 @@
 //! `windmeta sensitivity`: Sobol indices of a peak response for every input and the storm.
 
-use super::args::{AnalysisArgs, ResponseArgs, describe};
+use super::args::{AnalysisArgs, ResponseArgs};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::metamodel_sensitivity;
@@ -24,7 +24,7 @@ pub struct SensitivityArgs {
 
 pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
     let (metamodel, problem) = read_metamodel(&args.model)?;
-    let response = args.response.response(&problem);
+    let response = args.response.response(&problem)?;
     let started = Instant::now();
     let result = metamodel_sensitivity(
         &metamodel,
@@ -41,7 +41,7 @@ pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
     }
     let mut out = format!(
         "peak {}: {} storms (N = {}) in {seconds:.2} s; mean {:.5} m, sd {:.5} m\n",
-        describe(response),
+        response.describe(),
         result.evaluations,
         result.samples,
         result.mean,

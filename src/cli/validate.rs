@@ -70,13 +70,30 @@ pub fn validate(args: &ValidateArgs) -> Result<String> {
         return Ok(json);
     }
     let modes: Vec<String> = report.mode_mean_relative_errors.iter().map(|e| format!("{e:.2e}")).collect();
+    let mut responses = format!(
+        "{:<14} {:>5} {:>12} {:>11} {:>9} {:>9} {:>6}\n",
+        "response", "floor", "mean peak", "correlation", "median %", "p95 %", "gap"
+    );
+    for r in &report.responses {
+        responses += &format!(
+            "{:<14} {:>5} {:>9.4} {:<4} {:>9.4} {:>9.2} {:>9.2} {:>6.3}\n",
+            r.response,
+            r.floor,
+            r.mean_reference_peak,
+            r.unit,
+            r.peak_correlation,
+            100.0 * r.median_peak_relative_error,
+            100.0 * r.p95_peak_relative_error,
+            r.max_exceedance_gap
+        );
+    }
     Ok(format!(
         "{} on {} fresh samples (seed {}){}\n\
          peak roof displacement: correlation {:.4}, median relative error {:.2} %, 95th percentile {:.2} %\n\
          mean relative error, full PC-NARX: roof {:.2e}, modes [{}]\n\
          calibration mean relative error (NARX, mean over modes): {:.2e}\n\
          largest gap between the exceedance curves: {:.3}\n\
-         per sample: reference {:.1} ms, metamodel {:.2} ms (×{:.0})\n",
+         per sample: reference {:.1} ms, metamodel {:.2} ms (×{:.0})\n{}",
         problem.name,
         report.samples,
         report.seed,
@@ -91,5 +108,6 @@ pub fn validate(args: &ValidateArgs) -> Result<String> {
         1e3 * report.reference_seconds_per_sample,
         1e3 * report.metamodel_seconds_per_sample,
         report.reference_seconds_per_sample / report.metamodel_seconds_per_sample,
+        responses,
     ))
 }

@@ -5,7 +5,9 @@ mod damper;
 mod factored;
 mod full;
 mod modal;
+mod motion;
 
 pub use damper::{Dampers, ImplicitDamperSolve};
 pub use full::{FloorResponse, FullSystem, integrate_full};
 pub use modal::{ModalResponse, integrate_reduced};
+pub use motion::{ModalMotion, SampleModel};

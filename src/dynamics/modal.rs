@@ -8,16 +8,18 @@
 //! of [`super::damper`].
 
 use super::damper::{Dampers, ImplicitDamperSolve};
+use super::motion::ModalMotion;
 use crate::cancel::{CHECK_EVERY_STEPS, Cancel, check};
 use crate::error::{Error, Result};
 use crate::structure::Modes;
 use crate::wind::ModalForces;
 
 /// Modal displacement histories y_m(t), one series per retained mode (roof-normalised shapes, so
-/// Σ_m y_m is the roof displacement).
+/// Σ_m y_m is the roof displacement), and the integrator's velocities ẏ_m(t).
 #[derive(Debug, Clone)]
 pub struct ModalResponse {
     pub displacements: Vec<Vec<f64>>,
+    pub velocities: Vec<Vec<f64>>,
 }
 
 impl ModalResponse {
@@ -25,6 +27,11 @@ impl ModalResponse {
     pub fn roof(&self) -> Vec<f64> {
         let steps = self.displacements.first().map_or(0, Vec::len);
         (0..steps).map(|i| self.displacements.iter().map(|y| y[i]).sum()).collect()
+    }
+
+    /// The motion, as the responses of [`super::motion`] take it.
+    pub fn motion(self) -> ModalMotion {
+        ModalMotion { displacements: self.displacements, velocities: self.velocities }
     }
 }
 
@@ -126,6 +133,13 @@ pub fn integrate_reduced(
             series
         })
         .collect();
+    let mut velocities: Vec<Vec<f64>> = (0..count)
+        .map(|_| {
+            let mut series = Vec::with_capacity(steps);
+            series.push(0.0);
+            series
+        })
+        .collect();
     let mut known = vec![[0.0; 2]; count];
     let mut a = vec![0.0; count];
     let mut s = vec![0.0; count];
@@ -165,9 +179,10 @@ pub fn integrate_reduced(
                 return Err(Error::Numerical(format!("the reduced model diverged at step {i}")));
             }
             displacements[m].push(y[m]);
+            velocities[m].push(v[m]);
         }
     }
-    Ok(ModalResponse { displacements })
+    Ok(ModalResponse { displacements, velocities })
 }
 
 #[cfg(test)]

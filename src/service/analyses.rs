@@ -252,7 +252,7 @@ impl AnalysisRequest {
             AnalysisRequest::Fragility(r) => (r.floor, r.response),
             AnalysisRequest::Sensitivity(r) => (r.floor, r.response),
         };
-        response_of(floor, kind, problem).check(problem.structure.floors())?;
+        response_of(floor, kind, problem).check(&problem.structure)?;
         match self {
             AnalysisRequest::Hazard(r) => r.options(problem)?.check(),
             AnalysisRequest::Fragility(r) => r.options()?.check(),

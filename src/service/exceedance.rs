@@ -29,6 +29,12 @@ pub enum ResponseKind {
     Displacement,
     /// Inter-storey drift below the floor (m).
     Drift,
+    /// Floor acceleration (m/s²), from the equations of motion of the reduced model.
+    Acceleration,
+    /// Axial force of the damper in the storey below the floor (N).
+    DamperForce,
+    /// Axial elongation of that damper's brace (m).
+    DamperStroke,
 }
 
 /// The response a request names: its kind at `floor`, the roof when absent.
@@ -37,6 +43,9 @@ pub fn response_of(floor: Option<usize>, kind: ResponseKind, problem: &Problem) 
     match kind {
         ResponseKind::Displacement => Response::Displacement { floor },
         ResponseKind::Drift => Response::Drift { floor },
+        ResponseKind::Acceleration => Response::Acceleration { floor },
+        ResponseKind::DamperForce => Response::DamperForce { floor },
+        ResponseKind::DamperStroke => Response::DamperStroke { floor },
     }
 }
 

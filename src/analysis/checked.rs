@@ -1,0 +1,107 @@
+//! The responses a validation judges a metamodel by: the roof displacement, the largest drift, the
+//! roof acceleration and the largest damper force, each compared peak for peak with the reference.
+//!
+//! "Largest" is a floor, not an envelope: the floor (or damper) whose peak is largest on average
+//! over the reference samples, so that both models are compared on the same named response.
+
+use super::exceedance::max_exceedance_gap;
+use super::response::{Response, ResponseView};
+use super::{pearson, quantile};
+use crate::error::Result;
+use serde::{Deserialize, Serialize};
+
+/// One sample's peaks of every response a validation checks.
+#[derive(Debug, Clone)]
+pub struct CheckedPeaks {
+    roof_displacement: f64,
+    roof_acceleration: f64,
+    /// Per floor, from the first.
+    drifts: Vec<f64>,
+    /// Per damper floor (the floors with a damper below), with the floor.
+    damper_forces: Vec<(usize, f64)>,
+}
+
+impl CheckedPeaks {
+    pub fn roof_displacement(&self) -> f64 {
+        self.roof_displacement
+    }
+
+    pub fn of(view: &ResponseView) -> Result<CheckedPeaks> {
+        let floors = view.structure.floors();
+        let drifts = (1..=floors).map(|floor| Response::Drift { floor }.peak(view)).collect::<Result<_>>()?;
+        let damper_forces = view
+            .structure
+            .dampers
+            .iter()
+            .map(|d| {
+                let floor = d.upper_floor + 1;
+                Ok((floor, Response::DamperForce { floor }.peak(view)?))
+            })
+            .collect::<Result<_>>()?;
+        Ok(CheckedPeaks {
+            roof_displacement: Response::Displacement { floor: floors }.peak(view)?,
+            roof_acceleration: Response::Acceleration { floor: floors }.peak(view)?,
+            drifts,
+            damper_forces,
+        })
+    }
+}
+
+/// How closely the metamodel's peaks of one response follow the reference's.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ResponseValidation {
+    /// `displacement`, `drift`, `acceleration` or `damper_force`.
+    pub response: String,
+    pub floor: usize,
+    /// Unit of the peaks: m, m/s² or N.
+    pub unit: String,
+    /// Mean of the reference peaks.
+    pub mean_reference_peak: f64,
+    pub peak_correlation: f64,
+    pub median_peak_relative_error: f64,
+    pub p95_peak_relative_error: f64,
+    pub max_exceedance_gap: f64,
+}
+
+impl ResponseValidation {
+    fn of(response: Response, reference: &[f64], metamodel: &[f64]) -> ResponseValidation {
+        let mut errors: Vec<f64> = reference.iter().zip(metamodel).map(|(r, m)| (m - r).abs() / r.abs()).collect();
+        errors.sort_by(f64::total_cmp);
+        ResponseValidation {
+            response: response.kind().into(),
+            floor: response.floor(),
+            unit: response.unit().into(),
+            mean_reference_peak: reference.iter().sum::<f64>() / reference.len() as f64,
+            peak_correlation: pearson(reference, metamodel),
+            median_peak_relative_error: quantile(&errors, 0.5),
+            p95_peak_relative_error: quantile(&errors, 0.95),
+            max_exceedance_gap: max_exceedance_gap(reference, metamodel),
+        }
+    }
+}
+
+/// The figures of every checked response, sample `k` of both lists being the same inputs and storm.
+pub fn compare(reference: &[CheckedPeaks], metamodel: &[CheckedPeaks]) -> Vec<ResponseValidation> {
+    let column =
+        |peaks: &[CheckedPeaks], pick: &dyn Fn(&CheckedPeaks) -> f64| -> Vec<f64> { peaks.iter().map(pick).collect() };
+    let Some(first) = reference.first() else { return Vec::new() };
+    let floors = first.drifts.len();
+    let mean = |pick: &dyn Fn(&CheckedPeaks) -> f64| column(reference, pick).iter().sum::<f64>();
+    let largest = |count: usize, pick: &dyn Fn(&CheckedPeaks, usize) -> f64| -> Option<usize> {
+        (0..count).max_by(|&a, &b| mean(&|p| pick(p, a)).total_cmp(&mean(&|p| pick(p, b))))
+    };
+    let mut out = Vec::new();
+    let mut add = |response: Response, pick: &dyn Fn(&CheckedPeaks) -> f64| {
+        out.push(ResponseValidation::of(response, &column(reference, pick), &column(metamodel, pick)));
+    };
+    add(Response::Displacement { floor: floors }, &|p| p.roof_displacement);
+    if let Some(i) = largest(floors, &|p, i| p.drifts[i]) {
+        add(Response::Drift { floor: i + 1 }, &|p| p.drifts[i]);
+    }
+    add(Response::Acceleration { floor: floors }, &|p| p.roof_acceleration);
+    if let Some(i) = largest(first.damper_forces.len(), &|p, i| p.damper_forces[i].1) {
+        add(Response::DamperForce { floor: first.damper_forces[i].0 }, &|p| p.damper_forces[i].1);
+    }
+    out
+}
