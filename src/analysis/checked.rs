@@ -87,9 +87,9 @@ pub fn compare(reference: &[CheckedPeaks], metamodel: &[CheckedPeaks]) -> Vec<Re
         |peaks: &[CheckedPeaks], pick: &dyn Fn(&CheckedPeaks) -> f64| -> Vec<f64> { peaks.iter().map(pick).collect() };
     let Some(first) = reference.first() else { return Vec::new() };
     let floors = first.drifts.len();
-    let mean = |pick: &dyn Fn(&CheckedPeaks) -> f64| column(reference, pick).iter().sum::<f64>();
+    let total = |pick: &dyn Fn(&CheckedPeaks) -> f64| column(reference, pick).iter().sum::<f64>();
     let largest = |count: usize, pick: &dyn Fn(&CheckedPeaks, usize) -> f64| -> Option<usize> {
-        (0..count).max_by(|&a, &b| mean(&|p| pick(p, a)).total_cmp(&mean(&|p| pick(p, b))))
+        (0..count).max_by(|&a, &b| total(&|p| pick(p, a)).total_cmp(&total(&|p| pick(p, b))))
     };
     let mut out = Vec::new();
     let mut add = |response: Response, pick: &dyn Fn(&CheckedPeaks) -> f64| {
