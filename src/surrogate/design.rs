@@ -16,45 +16,13 @@
 //! (the weighted-least-squares design of Cohen & Migliorati 2017); the mixture keeps w ≤ 2, so no
 //! experiment dominates, while the experiments at high speeds anchor the high-degree terms there.
 
-use super::options::CalibrationOptions;
+use super::options::{CalibrationOptions, WindCoverage};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::uncertainty::{Marginal, latin_hypercube, rng_from_seed};
-use serde::{Deserialize, Serialize};
-
-/// The wind speeds (m/s at the 10 m station) a calibration's design must cover.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
-#[serde(deny_unknown_fields)]
-pub struct WindCoverage {
-    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
-    pub lower: f64,
-    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
-    pub upper: f64,
-}
-
-/// The fastest station speed a design may cover (m/s), as for climates.
-const MAX_SPEED: f64 = 150.0;
 
 impl WindCoverage {
-    pub fn validate(&self) -> Result<()> {
-        let field = "cover_wind_speeds";
-        if !(self.lower.is_finite() && self.upper.is_finite() && self.lower > 0.0 && self.upper <= MAX_SPEED) {
-            return Err(Error::invalid(
-                field,
-                format!(
-                    "lower and upper must be speeds in (0, {MAX_SPEED}] m/s, got {} and {}",
-                    self.lower, self.upper
-                ),
-            ));
-        }
-        if self.lower >= self.upper {
-            return Err(Error::invalid(field, format!("lower ({}) must be below upper ({})", self.lower, self.upper)));
-        }
-        Ok(())
-    }
-
-    /// The mixture's density relative to the input marginal's: g(v)/f(v) = ½ + ½ u(v)/f(v).
+    /// The mixture's density g(v) = ½ f(v) + ½ u(v), u the uniform density on the range.
     fn density(&self, marginal: &Marginal, v: f64) -> f64 {
         let uniform = if (self.lower..=self.upper).contains(&v) { 1.0 / (self.upper - self.lower) } else { 0.0 };
         0.5 * marginal.pdf(v) + 0.5 * uniform

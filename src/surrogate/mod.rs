@@ -20,12 +20,12 @@ mod refine;
 pub use batch::Workspace as BatchWorkspace;
 pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};
-pub use design::{Design, WindCoverage, design};
+pub use design::{Design, design};
 pub use lanes::LANES;
 pub use metamodel::{
     CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds, StaticResponse,
 };
-pub use options::{CalibrationOptions, MAX_EXPERIMENTS};
+pub use options::{CalibrationOptions, MAX_EXPERIMENTS, WindCoverage};
 pub use parametrization::Parametrization;
 pub use progress::{Observer, Progress, Silent};
 pub use refine::Refinement;

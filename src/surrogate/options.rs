@@ -2,7 +2,6 @@
 //! dictionary, the expansions, the refinement, with the paper's values as defaults.
 
 use super::Parametrization;
-use super::design::WindCoverage;
 use super::narx::NarxOptions;
 use super::pce::PceOptions;
 use super::refine::Refinement;
@@ -67,5 +66,38 @@ impl CalibrationOptions {
             coverage.validate()?;
         }
         self.pce.validate()
+    }
+}
+
+/// The wind speeds (m/s at the 10 m station) a calibration's design must cover.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct WindCoverage {
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
+    pub lower: f64,
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
+    pub upper: f64,
+}
+
+/// The fastest station speed a design may cover (m/s), as for climates.
+const MAX_SPEED: f64 = 150.0;
+
+impl WindCoverage {
+    pub fn validate(&self) -> Result<()> {
+        let field = "cover_wind_speeds";
+        if !(self.lower.is_finite() && self.upper.is_finite() && self.lower > 0.0 && self.upper <= MAX_SPEED) {
+            return Err(Error::invalid(
+                field,
+                format!(
+                    "lower and upper must be speeds in (0, {MAX_SPEED}] m/s, got {} and {}",
+                    self.lower, self.upper
+                ),
+            ));
+        }
+        if self.lower >= self.upper {
+            return Err(Error::invalid(field, format!("lower ({}) must be below upper ({})", self.lower, self.upper)));
+        }
+        Ok(())
     }
 }
