@@ -3,13 +3,13 @@
 
 use super::ApiJson;
 use super::metamodels::load;
-use super::operations::{Operation, OperationKind};
-use super::sampling::{Queued, Work, answer_or_queue};
+use super::operations::OperationKind;
+use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
 use crate::service::AppState;
 use crate::service::analyses::{
     AnalysisAnswer, AnalysisJob, AnalysisRequest, FragilityRequest, HazardRequest, SensitivityRequest,
 };
-use crate::service::error::{ApiError, ProblemDetails};
+use crate::service::error::ApiError;
 use axum::extract::{Path, State};
 use axum::http::HeaderMap;
 use axum::response::Response as HttpResponse;
@@ -66,12 +66,7 @@ async fn analyse(
             (String = "text/csv", example = "threshold_m,annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range\n0.6,0.1,0.09,0.11,0.03,10,0\n"),
             (String = "image/svg+xml"),
         )),
-        (status = 202, description = "Queued as an operation; follow `Location`", body = Operation,
-            headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
-        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 422, description = "A field is invalid (named in `errors`), or a sample diverged", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "The queue is full, every synchronous slot is taken, the request timed out, or the server is shutting down", body = ProblemDetails, content_type = "application/problem+json",
-            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
+        SamplingResponses,
     ))]
 async fn hazard(
     State(state): State<AppState>,
@@ -96,12 +91,7 @@ async fn hazard(
             (AnalysisAnswer = "application/json"),
             (String = "image/svg+xml"),
         )),
-        (status = 202, description = "Queued as an operation; follow `Location`", body = Operation,
-            headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
-        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 422, description = "A field is invalid (named in `errors`), or a sample diverged", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "The queue is full, every synchronous slot is taken, the request timed out, or the server is shutting down", body = ProblemDetails, content_type = "application/problem+json",
-            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
+        SamplingResponses,
     ))]
 async fn fragility(
     State(state): State<AppState>,
@@ -123,12 +113,7 @@ async fn fragility(
     ),
     responses(
         (status = 200, description = "The indices", body = AnalysisAnswer),
-        (status = 202, description = "Queued as an operation; follow `Location`", body = Operation,
-            headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
-        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 422, description = "A field is invalid (named in `errors`), or a sample diverged", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "The queue is full, every synchronous slot is taken, the request timed out, or the server is shutting down", body = ProblemDetails, content_type = "application/problem+json",
-            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
+        SamplingResponses,
     ))]
 async fn sensitivity(
     State(state): State<AppState>,

@@ -1,6 +1,6 @@
 //! Stored metamodels, and the exceedance curves sampled from them.
 
-use super::sampling::{Queued, Work, answer_or_queue};
+use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
 use crate::problem::Problem;
 use crate::service::error::{ApiError, ProblemDetails};
@@ -134,12 +134,7 @@ pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, 
             (String = "text/csv", example = "threshold_m,probability,lower,upper\n0.31,1,0.996,1\n"),
             (String = "image/svg+xml"),
         )),
-        (status = 202, description = "Queued as an operation; follow `Location`", body = Operation,
-            headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
-        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 422, description = "A field is invalid (named in `errors`), or a sample diverged", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "The queue is full (asynchronous requests), every synchronous sampling slot is taken, the request was not answered within the server's timeout, or the server is shutting down", body = ProblemDetails, content_type = "application/problem+json",
-            headers(("Retry-After" = u64, description = "Seconds before trying again"))),
+        SamplingResponses,
     ))]
 async fn exceedance_curve(
     State(state): State<AppState>,

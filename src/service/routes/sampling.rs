@@ -3,11 +3,11 @@
 //! operation when it is large or the client prefers.
 
 use super::accept_job;
-use super::operations::OperationKind;
+use super::operations::{Operation, OperationKind};
 use crate::problem::Problem;
 use crate::service::AppState;
 use crate::service::cache::Loaded;
-use crate::service::error::ApiError;
+use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::{Rendering, RequestWatch, StopOnDrop};
 use crate::surrogate::{Metamodel, Observer};
 use axum::http::{HeaderMap, header};
@@ -95,4 +95,25 @@ pub async fn answer_or_queue(
         }
     };
     Ok(([(header::CONTENT_TYPE, content_type)], body).into_response())
+}
+
+/// The answers a sampling route gives besides its 200, for the OpenAPI description (the handlers
+/// build these answers through [`answer_or_queue`] and the error type, not through this type).
+#[derive(utoipa::IntoResponses)]
+#[expect(dead_code, reason = "a description of responses, never built")]
+pub enum SamplingResponses {
+    #[response(status = 202, description = "Queued as an operation; follow `Location`",
+        headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling")))]
+    Queued(Operation),
+    #[response(status = 404, description = "No such metamodel", content_type = "application/problem+json")]
+    NotFound(ProblemDetails),
+    #[response(
+        status = 422,
+        description = "A field is invalid (named in `errors`), or a sample diverged",
+        content_type = "application/problem+json"
+    )]
+    Invalid(ProblemDetails),
+    #[response(status = 503, description = "The queue is full (asynchronous requests), every synchronous sampling slot is taken, the request was not answered within the server's timeout, or the server is shutting down",
+        content_type = "application/problem+json", headers(("Retry-After" = u64, description = "Seconds before trying again")))]
+    Unavailable(ProblemDetails),
 }
