@@ -91,19 +91,20 @@ pub fn max_exceedance_gap(a: &[f64], b: &[f64]) -> f64 {
 
 /// Most thresholds a request may list.
 pub const MAX_THRESHOLDS: usize = 10_000;
-/// Largest threshold (m): peaks are absolute values, so thresholds are non-negative, and no
-/// building's displacement or drift comes near a kilometre.
-pub const MAX_THRESHOLD_M: f64 = 1000.0;
+/// Largest threshold, in the response's unit (m, m/s² or N): peaks are absolute values, so
+/// thresholds are non-negative, and no displacement, acceleration or damper force comes near 10⁹
+/// of its unit; the bound only keeps absurd values out.
+pub const MAX_THRESHOLD: f64 = 1e9;
 
-/// Errs unless `thresholds` holds 1 to [`MAX_THRESHOLDS`] values in [0, [`MAX_THRESHOLD_M`]].
+/// Errs unless `thresholds` holds 1 to [`MAX_THRESHOLDS`] values in [0, [`MAX_THRESHOLD`]].
 pub fn check_thresholds(thresholds: &[f64]) -> Result<()> {
     if thresholds.is_empty()
         || thresholds.len() > MAX_THRESHOLDS
-        || thresholds.iter().any(|x| !(0.0..=MAX_THRESHOLD_M).contains(x))
+        || thresholds.iter().any(|x| !(0.0..=MAX_THRESHOLD).contains(x))
     {
         return Err(Error::invalid(
             "thresholds",
-            format!("must be 1 to {MAX_THRESHOLDS} numbers between 0 and {MAX_THRESHOLD_M} m"),
+            format!("must be 1 to {MAX_THRESHOLDS} numbers between 0 and {MAX_THRESHOLD:e}, in the response's unit"),
         ));
     }
     Ok(())

@@ -58,7 +58,8 @@ impl HazardOptions {
             ));
         }
         if let Some(limit) = self.limit {
-            check_thresholds(&[limit]).map_err(|_| Error::invalid("limit", "must lie between 0 and 1000 m"))?;
+            check_thresholds(&[limit])
+                .map_err(|_| Error::invalid("limit", "must lie between 0 and 1e9, in the response's unit"))?;
         }
         Ok(())
     }

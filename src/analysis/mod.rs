@@ -17,7 +17,7 @@ mod validation;
 pub use checked::ResponseValidation;
 pub use climate::{ClimateCoverage, ClimateSpec};
 pub use exceedance::{
-    Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD_M, MAX_THRESHOLDS, OnDivergence, automatic_thresholds,
+    Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD, MAX_THRESHOLDS, OnDivergence, automatic_thresholds,
     check_confidence, check_samples, check_thresholds, exceedance_curve, max_exceedance_gap, metamodel_peaks, peaks_at,
 };
 pub use fragility::{

@@ -36,7 +36,7 @@ pub struct HazardRequest {
     /// The law of the annual maximum storm speed at 10 m; the metamodel's `wind_speed` marginal
     /// when absent.
     pub climate: Option<ClimateSpec>,
-    /// Peak values (m) at which to report the annual probability; 50 spread over the sampled
+    /// Peak values (in the response's unit) at which to report the annual probability; 50 spread over the sampled
     /// peaks when absent.
     #[schema(schema_with = thresholds_schema)]
     pub thresholds: Option<Vec<f64>>,
@@ -44,7 +44,7 @@ pub struct HazardRequest {
     /// absent.
     #[schema(max_items = 100)]
     pub return_periods: Option<Vec<f64>>,
-    /// A limit (m) whose annual probability and reliability index are reported.
+    /// A limit (in the response's unit) whose annual probability and reliability index are reported.
     #[schema(minimum = 0, maximum = 1000)]
     pub limit: Option<f64>,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
@@ -76,7 +76,7 @@ pub struct FragilityRequest {
     /// Storm speeds at 10 m (m/s, 0 to 150), 1 to 200 of them; 20 to 60 by 2 when absent.
     #[schema(min_items = 1, max_items = 200)]
     pub wind_speeds: Vec<f64>,
-    /// Peak values (m).
+    /// Peak values (in the response's unit).
     #[schema(schema_with = thresholds_schema)]
     pub thresholds: Option<Vec<f64>>,
     /// Storms at each speed.
@@ -298,11 +298,12 @@ impl AnalysisAnswer {
     pub fn render(&self, rendering: Rendering) -> (&'static str, String) {
         match (self, rendering) {
             (AnalysisAnswer::Hazard(a), Rendering::Csv) => ("text/csv", a.curve.csv()),
-            (AnalysisAnswer::Hazard(a), Rendering::Svg) => {
-                ("image/svg+xml", hazard_svg(&a.curve, &format!("peak {:?} x (m)", a.response)))
-            }
+            (AnalysisAnswer::Hazard(a), Rendering::Svg) => (
+                "image/svg+xml",
+                hazard_svg(&a.curve, &format!("peak {} x ({})", a.response.describe(), a.response.unit())),
+            ),
             (AnalysisAnswer::Fragility(a), Rendering::Svg) => {
-                ("image/svg+xml", fragility_svg(&a.fragility, &format!("peak {:?}", a.response)))
+                ("image/svg+xml", fragility_svg(&a.fragility, &format!("peak {}", a.response.describe())))
             }
             _ => ("application/json", serde_json::to_string(self).expect("an answer serialises")),
         }

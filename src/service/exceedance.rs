@@ -66,7 +66,7 @@ pub struct ExceedanceRequest {
     #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub floor: Option<usize>,
     pub response: ResponseKind,
-    /// Peak values (m, 0 to 1000) at which to evaluate the curve; 50 evenly spread over the sampled
+    /// Peak values (in the response's unit: m, m/s² or N; 0 to 10⁹) at which to evaluate the curve; 50 evenly spread over the sampled
     /// peaks when absent.
     #[schema(schema_with = thresholds_schema)]
     pub thresholds: Option<Vec<f64>>,
@@ -185,7 +185,7 @@ impl Rendering {
                 ("text/csv", text)
             }
             Rendering::Svg => {
-                let label = format!("peak {:?} x (m)", answer.response);
+                let label = format!("peak {} x ({})", answer.response.describe(), answer.response.unit());
                 ("image/svg+xml", exceedance_svg(&[("PC-NARX", curve)], &label))
             }
         }

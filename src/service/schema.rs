@@ -31,9 +31,10 @@ pub fn marginals_schema() -> impl Into<RefOr<Schema>> {
         .additional_properties(Some(Ref::from_schema_name("Marginal")))
 }
 
-/// The thresholds of an exceedance curve: 1 to 10 000 values of 0 to 1000 m, or null.
+/// The thresholds of an exceedance curve: 1 to 10 000 values of 0 to 10⁹ in the response's unit, or null.
 pub fn thresholds_schema() -> impl Into<RefOr<Schema>> {
-    let item = ObjectBuilder::new().schema_type(Type::Number).minimum(Some(0.0)).maximum(Some(1000.0));
+    let item =
+        ObjectBuilder::new().schema_type(Type::Number).minimum(Some(0.0)).maximum(Some(crate::analysis::MAX_THRESHOLD));
     ArrayBuilder::new()
         .schema_type(SchemaType::from_iter([Type::Array, Type::Null]))
         .items(item)
