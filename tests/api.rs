@@ -80,6 +80,10 @@ async fn calibrate_follow_fetch_and_sample() {
         assert_eq!(curve["response"]["kind"], response);
         assert!(curve["thresholds"].as_array().unwrap().iter().all(|x| x.as_f64().unwrap() > 0.0), "{curve}");
     }
+    // Thresholds are in the response's unit: newtons for a damper force.
+    let forces = json!({"samples": 8, "response": "damper_force", "floor": 32, "thresholds": [1000, 5000, 20000]});
+    let (status, curve) = app.post_json(&path, forces).await;
+    assert_eq!((status, curve["thresholds"].as_array().map(Vec::len)), (200, Some(3)), "{curve}");
     let (s, ct, body) =
         problem(app.post(&path, json!({"samples": 8, "response": "damper_force", "floor": 99})).await).await;
     assert_problem(s, &ct, &body, 422, "floor");
