@@ -75,15 +75,15 @@ async fn calibrate_follow_fetch_and_sample() {
     assert!(svg.text().await.unwrap().starts_with("<svg"));
     // The responses from the equations of motion, and a damper response where there is no damper.
     for response in ["acceleration", "damper_force", "damper_stroke"] {
-        let (status, curve) = app.post_json(&path, json!({"samples": 8, "response": response, "floor": 32})).await;
-        assert_eq!(status, 200, "{response}: {curve}");
-        assert_eq!(curve["response"]["kind"], response);
-        assert!(curve["thresholds"].as_array().unwrap().iter().all(|x| x.as_f64().unwrap() > 0.0), "{curve}");
+        let (status, other) = app.post_json(&path, json!({"samples": 8, "response": response, "floor": 32})).await;
+        assert_eq!(status, 200, "{response}: {other}");
+        assert_eq!(other["response"]["kind"], response);
+        assert!(other["thresholds"].as_array().unwrap().iter().all(|x| x.as_f64().unwrap() > 0.0), "{other}");
     }
     // Thresholds are in the response's unit: newtons for a damper force.
     let forces = json!({"samples": 8, "response": "damper_force", "floor": 32, "thresholds": [1000, 5000, 20000]});
-    let (status, curve) = app.post_json(&path, forces).await;
-    assert_eq!((status, curve["thresholds"].as_array().map(Vec::len)), (200, Some(3)), "{curve}");
+    let (status, in_newtons) = app.post_json(&path, forces).await;
+    assert_eq!((status, in_newtons["thresholds"].as_array().map(Vec::len)), (200, Some(3)), "{in_newtons}");
     let (s, ct, body) =
         problem(app.post(&path, json!({"samples": 8, "response": "damper_force", "floor": 99})).await).await;
     assert_problem(s, &ct, &body, 422, "floor");
