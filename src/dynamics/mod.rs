@@ -6,6 +6,7 @@ mod factored;
 mod full;
 mod modal;
 mod motion;
+mod power;
 
 pub use damper::{Dampers, ImplicitDamperSolve};
 pub use full::{FloorResponse, FullSystem, integrate_full};
