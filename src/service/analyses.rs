@@ -45,7 +45,7 @@ pub struct HazardRequest {
     #[schema(max_items = 100)]
     pub return_periods: Option<Vec<f64>>,
     /// A limit (in the response's unit) whose annual probability and reliability index are reported.
-    #[schema(minimum = 0, maximum = 1000)]
+    #[schema(minimum = 0, maximum = 1e9)]
     pub limit: Option<f64>,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
     pub confidence: f64,
