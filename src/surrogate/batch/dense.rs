@@ -224,6 +224,27 @@ fn suspicious(squares: &Lanes) -> bool {
     !sane
 }
 
+/// Steps `from..from + count` into `block` as [`Recorder`] outputs from slot `offset`, with the
+/// rest state in slot 0 when the block is the storm's first (`first` = 0).
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn record_block<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
+    isa: V::Isa,
+    dense: &DenseLinear,
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    rest: &[V; M],
+    carry: &mut Carry<V, M>,
+    [first, from, count, offset]: [usize; 4],
+    block: &mut [Lanes],
+) -> Lanes {
+    let mut recorder = Recorder { outputs: block };
+    if first == 0 {
+        recorder.take(0, rest);
+    }
+    advance::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, carry, from, count, offset, &mut recorder)
+}
+
 /// The whole storm by the dense linear models: step 0 at rest, then blocks of [`BLOCK`] steps into
 /// `sink`. A block that fails the cheap divergence test is run again from its start into memory
 /// and searched, so the error names the first step out of bounds.
@@ -254,14 +275,7 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
         let from = first.max(1);
         let (count, offset) = (first + len - from, from - first);
         let start = carry;
-        // The block's outputs into `block`, step 0's rest first when the block starts the storm.
-        let record = |carry: &mut Carry<V, M>, block: &mut [Lanes]| {
-            let mut recorder = Recorder { outputs: block };
-            if first == 0 {
-                recorder.take(0, &rest);
-            }
-            advance::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, carry, from, count, offset, &mut recorder)
-        };
+        let span = [first, from, count, offset];
         let squares = match sink {
             Sink::Peaks { gains, offsets, peaks } => {
                 let mut tracker =
@@ -286,11 +300,16 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
                 tracker.peaks.store(peaks);
                 squares
             }
-            Sink::Blocks(_) => record(&mut carry, &mut block),
+            // The block's outputs into `block`: a function, not a closure, since a closure does
+            // not inherit the target features this is compiled for, and its vector intrinsics
+            // became calls (a 40-fold slower recorded run).
+            Sink::Blocks(_) => {
+                record_block::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, &rest, &mut carry, span, &mut block)
+            }
         };
         if suspicious(&squares) {
             let mut replay = start;
-            record(&mut replay, &mut block);
+            record_block::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, &rest, &mut replay, span, &mut block);
             if let Some(divergence) = first_divergence(&block[..len * M], M, first) {
                 return Err(divergence);
             }
