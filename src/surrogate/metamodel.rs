@@ -200,7 +200,7 @@ impl Metamodel {
         let mut out = vec![vec![0.0; steps]; self.models.len()];
         let samples = [BatchSample { theta, forces }];
         let modes = self.models.len();
-        let mut consume = |first: usize, outputs: &[Lanes]| {
+        let mut consume = |first: usize, outputs: &[Lanes], _: &[Lanes]| {
             for (k, lanes) in outputs.iter().enumerate() {
                 let m = k % modes;
                 out[m][first + k / modes] = levels[m] + lanes[0] * self.models[m].output_scale;

@@ -79,8 +79,9 @@ impl DenseLinear {
 
 /// What the dense recursion does with each step's outputs, inside its own loop.
 trait StepSink<V: Vector, const M: usize> {
-    /// Step `i` of the block (counted from the block's first step) gave `y[m]`, every lane.
-    fn take(&mut self, i: usize, y: &[V; M]);
+    /// Step `i` of the block (counted from the block's first step) read `q[m]` and gave `y[m]`,
+    /// every lane.
+    fn take(&mut self, i: usize, y: &[V; M], q: &[V; M]);
 }
 
 /// Per lane the running peak of |offset + Σ_m gain_m ŷ_m| (see [`Sink::Peaks`]).
@@ -92,7 +93,7 @@ struct PeakTracker<V, const M: usize> {
 
 impl<V: Vector, const M: usize> StepSink<V, M> for PeakTracker<V, M> {
     #[inline(always)]
-    fn take(&mut self, _: usize, y: &[V; M]) {
+    fn take(&mut self, _: usize, y: &[V; M], _: &[V; M]) {
         let mut u = self.offsets;
         for (gain, y) in self.gains.iter().zip(y) {
             u = gain.mul_add(*y, u);
@@ -102,16 +103,20 @@ impl<V: Vector, const M: usize> StepSink<V, M> for PeakTracker<V, M> {
     }
 }
 
-/// The block's outputs as `outputs[i·M + m]`.
+/// The block's outputs and inputs as `outputs[i·M + m]`, `inputs[i·M + m]`.
 struct Recorder<'a> {
     outputs: &'a mut [Lanes],
+    inputs: &'a mut [Lanes],
 }
 
 impl<V: Vector, const M: usize> StepSink<V, M> for Recorder<'_> {
     #[inline(always)]
-    fn take(&mut self, i: usize, y: &[V; M]) {
+    fn take(&mut self, i: usize, y: &[V; M], q: &[V; M]) {
         for (y, to) in y.iter().zip(&mut self.outputs[i * M..(i + 1) * M]) {
             y.store(to);
+        }
+        for (q, to) in q.iter().zip(&mut self.inputs[i * M..(i + 1) * M]) {
+            q.store(to);
         }
     }
 }
@@ -203,7 +208,7 @@ fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOW
             for m in 0..M {
                 squares = next[m].mul_add(next[m], squares);
             }
-            sink.take(i + sink_offset, &next);
+            sink.take(i + sink_offset, &next, &q);
         },
     );
     *carry = Carry { last, before, last_input, before_input };
@@ -224,8 +229,8 @@ fn suspicious(squares: &Lanes) -> bool {
     !sane
 }
 
-/// Steps `from..from + count` into `block` as [`Recorder`] outputs from slot `offset`, with the
-/// rest state in slot 0 when the block is the storm's first (`first` = 0).
+/// Steps `from..from + count` into `block` and `inputs` as [`Recorder`] outputs from slot
+/// `offset`, with the rest state in slot 0 when the block is the storm's first (`first` = 0).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
 fn record_block<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
@@ -237,10 +242,11 @@ fn record_block<V: Vector, const M: usize, const K: usize, const KI: usize, cons
     carry: &mut Carry<V, M>,
     [first, from, count, offset]: [usize; 4],
     block: &mut [Lanes],
+    inputs: &mut [Lanes],
 ) -> Lanes {
-    let mut recorder = Recorder { outputs: block };
+    let mut recorder = Recorder { outputs: block, inputs };
     if first == 0 {
-        recorder.take(0, rest);
+        recorder.take(0, rest, &carry.last_input);
     }
     advance::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, carry, from, count, offset, &mut recorder)
 }
@@ -267,7 +273,7 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
             *input = interpolate(isa, coarse, p, &splat_weights(isa, w));
         }
     });
-    let mut block = vec![[0.0; LANES]; BLOCK * M];
+    let (mut block, mut inputs) = (vec![[0.0; LANES]; BLOCK * M], vec![[0.0; LANES]; BLOCK * M]);
     let mut first = 0;
     while first < steps {
         let len = BLOCK.min(steps - first);
@@ -284,7 +290,7 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
                     tracker.gains[m] = V::splat(isa, gains[m]);
                 }
                 if first == 0 {
-                    tracker.take(0, &rest);
+                    tracker.take(0, &rest, &carry.last_input);
                 }
                 let squares = advance::<V, M, K, KI, LOWER>(
                     isa,
@@ -303,19 +309,37 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
             // The block's outputs into `block`: a function, not a closure, since a closure does
             // not inherit the target features this is compiled for, and its vector intrinsics
             // became calls (a 40-fold slower recorded run).
-            Sink::Blocks(_) => {
-                record_block::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, &rest, &mut carry, span, &mut block)
-            }
+            Sink::Blocks(_) => record_block::<V, M, K, KI, LOWER>(
+                isa,
+                dense,
+                schedule,
+                coarse,
+                &rest,
+                &mut carry,
+                span,
+                &mut block,
+                &mut inputs,
+            ),
         };
         if suspicious(&squares) {
             let mut replay = start;
-            record_block::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, &rest, &mut replay, span, &mut block);
+            record_block::<V, M, K, KI, LOWER>(
+                isa,
+                dense,
+                schedule,
+                coarse,
+                &rest,
+                &mut replay,
+                span,
+                &mut block,
+                &mut inputs,
+            );
             if let Some(divergence) = first_divergence(&block[..len * M], M, first) {
                 return Err(divergence);
             }
         }
         if let Sink::Blocks(consume) = sink {
-            consume(first, &block[..len * M]);
+            consume(first, &block[..len * M], &inputs[..len * M]);
         }
         first += len;
     }

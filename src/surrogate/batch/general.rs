@@ -92,12 +92,13 @@ pub(super) fn run(lists: &TermLists, prepared: &Prepared, sink: &mut Sink) -> Re
         );
         step_block(lists, &inputs, &mut outputs, usize::from(first == 0), len);
         let block = &outputs[h * modes..(h + len) * modes];
+        let block_inputs = &inputs[h * modes..(h + len) * modes];
         // Checked once a block, so that the lanes never branch apart inside the recursion.
         if let Some(divergence) = first_divergence(block, modes, first) {
             return Err(divergence);
         }
         match sink {
-            Sink::Blocks(consume) => consume(first, block),
+            Sink::Blocks(consume) => consume(first, block, block_inputs),
             Sink::Peaks { gains, offsets, peaks } => {
                 for step in block.chunks_exact(modes) {
                     let mut u = *offsets;

@@ -110,7 +110,7 @@ mod tests {
     use crate::wind::ModalForces;
 
     /// Two coupled modes run jointly equal a hand-written recursion, in every lane, each lane with
-    /// its own coefficients; blocks boundaries do not show.
+    /// its own coefficients; blocks boundaries do not show; the blocks carry the inputs read.
     #[test]
     fn batch_equals_a_hand_written_recursion() {
         let a = [NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(1, 1, Some(1))];
@@ -126,14 +126,17 @@ mod tests {
             })
             .collect();
         let mut got = vec![vec![vec![0.0; steps]; 2]; 3];
-        let mut consume = |first: usize, outputs: &[Lanes]| {
-            for (k, lanes) in outputs.iter().enumerate() {
-                for (lane, history) in got.iter_mut().enumerate() {
-                    history[k % 2][first + k / 2] = lanes[lane];
+        let mut read = vec![vec![vec![f64::NAN; steps]; 2]; 3];
+        let mut consume = |first: usize, outputs: &[Lanes], inputs: &[Lanes]| {
+            for (k, (lanes, input)) in outputs.iter().zip(inputs).enumerate() {
+                for lane in 0..3 {
+                    got[lane][k % 2][first + k / 2] = lanes[lane];
+                    read[lane][k % 2][first + k / 2] = input[lane];
                 }
             }
         };
         run(&programs, &samples, steps, 0.01, &mut Workspace::default(), &mut Sink::Blocks(&mut consume)).unwrap();
+        assert!(read.iter().all(|lane| lane == &inputs), "the blocks' inputs are the forces on the storm's grid");
         for (k, history) in got.iter().enumerate() {
             let (ta, tb) = (&samples[k].theta[0], &samples[k].theta[1]);
             let (mut ya, mut yb) = (vec![0.0; steps], vec![0.0; steps]);
@@ -176,7 +179,7 @@ mod tests {
                 })
                 .collect();
             let mut got = vec![vec![0.0; steps * 2]; 5];
-            let mut consume = |first: usize, outputs: &[Lanes]| {
+            let mut consume = |first: usize, outputs: &[Lanes], _: &[Lanes]| {
                 for (k, lanes) in outputs.iter().enumerate() {
                     for (lane, history) in got.iter_mut().enumerate() {
                         history[first * 2 + k] = lanes[lane];
@@ -206,7 +209,7 @@ mod tests {
             BatchSample { theta: vec![vec![0.02, 1.9, -0.95]], forces: &forces },
             BatchSample { theta: vec![vec![0.02, 2.1, -0.9]], forces: &forces },
         ];
-        let err = run(&programs, &samples, 5000, 0.01, &mut Workspace::default(), &mut Sink::Blocks(&mut |_, _| {}))
+        let err = run(&programs, &samples, 5000, 0.01, &mut Workspace::default(), &mut Sink::Blocks(&mut |_, _, _| {}))
             .unwrap_err();
         match err {
             BatchError::Diverged(d) => assert_eq!((d.lane, d.mode), (1, 0)),

@@ -8,9 +8,10 @@ pub(super) const BLOCK: usize = 512;
 
 /// What a batch produces from its scaled outputs ŷ.
 pub enum Sink<'a> {
-    /// Every block to `consume(first, outputs)`, `outputs[i·modes + m]` being mode m at step
-    /// first + i, one value per lane.
-    Blocks(&'a mut dyn FnMut(usize, &[Lanes])),
+    /// Every block to `consume(first, outputs, inputs)`, `outputs[i·modes + m]` being mode m's
+    /// scaled output at step first + i and `inputs[i·modes + m]` the scaled input deviation it
+    /// read there, one value per lane.
+    Blocks(&'a mut dyn FnMut(usize, &[Lanes], &[Lanes])),
     /// Per lane the peak over the storm of |offset + Σ_m gain_m ŷ_m| (a response u = Σ_m w_m y_m
     /// with y_m = level_m + scale_m ŷ_m: gain_m = w_m scale_m, offset = Σ_m w_m level_m), formed
     /// inside the batch's own vectorised code.
