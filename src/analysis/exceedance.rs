@@ -1,11 +1,11 @@
 //! Exceedance curves of peak responses: P(peak > x) over a threshold grid, with exact binomial
 //! (Clopper-Pearson) confidence bands, and the metamodel sampling that feeds them.
 
-use super::{Response, ResponseView};
-use crate::dynamics::{ModalMotion, SampleModel};
+use super::Response;
+use super::motion_peaks::motion_sink;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::surrogate::{BatchWorkspace, LANES, Metamodel, Observer, Progress};
+use crate::surrogate::{BatchInput, BatchWorkspace, LANES, Metamodel, Observer, Progress, Reduction};
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use crate::wind::{self, ForceSource};
 use rayon::prelude::*;
@@ -162,13 +162,18 @@ pub enum OnDivergence {
 }
 
 /// Peaks of `response` for every row of `draws`, in parallel by batches of [`LANES`], reporting
-/// progress and stopping when `observer` asks.
+/// progress and stopping when `observer` asks. Displacements, drifts and strokes are combinations
+/// formed inside the free run; accelerations and damper forces come from the batch's motion
+/// ([`motion_sink`]).
 pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observer: &dyn Observer) -> Result<Vec<f64>> {
     let Draws { problem, rows, storms, seed, on_divergence } = *draws;
     assert_eq!(rows.len(), storms.len(), "one storm per row");
     let path = metamodel.calibration.options.wind;
-    let Some(weights) = response.modal_weights(&metamodel.modes.shapes, &problem.structure)? else {
-        return peaks_by_motion(metamodel, draws, response, observer);
+    let weights = response.modal_weights(&metamodel.modes.shapes, &problem.structure)?;
+    let sink_for = |inputs: &[&[f64]]| motion_sink(problem, &metamodel.modes.shapes, response, inputs);
+    let reduction = match &weights {
+        Some(weights) => Reduction::Combination(weights),
+        None => Reduction::Motion(&sink_for),
     };
     let (done, total) = (AtomicUsize::new(0), rows.len());
     let peaks: Vec<Vec<f64>> = rows
@@ -186,16 +191,16 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
                     .zip(keys)
                     .map(|(x, &k)| Ok(problem.sample_storm(x, path, seed, k, wind_workspace)?.1))
                     .collect::<Result<Vec<_>>>()?;
-                let batch: Vec<(usize, &[f64], &dyn ForceSource)> = xs
+                let batch: Vec<BatchInput> = xs
                     .iter()
                     .zip(&storms)
                     .enumerate()
                     .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
                     .collect();
                 let peaks = match on_divergence {
-                    OnDivergence::Fail => metamodel.peaks(problem, &batch, &weights, batch_workspace)?,
+                    OnDivergence::Fail => metamodel.peaks(problem, &batch, &reduction, batch_workspace)?,
                     OnDivergence::Exceed => metamodel
-                        .peaks_or_divergence(problem, &batch, &weights, batch_workspace)?
+                        .peaks_or_divergence(problem, &batch, &reduction, batch_workspace)?
                         .into_iter()
                         .map(|peak| peak.unwrap_or(f64::INFINITY))
                         .collect(),
@@ -207,44 +212,6 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
         )
         .collect::<Result<_>>()?;
     Ok(peaks.concat())
-}
-
-/// Peaks of a response that needs the equations of motion (acceleration, damper force): each
-/// sample's predicted modal histories on the storm grid, their velocities, then the response.
-fn peaks_by_motion(
-    metamodel: &Metamodel,
-    draws: &Draws,
-    response: Response,
-    observer: &dyn Observer,
-) -> Result<Vec<f64>> {
-    let Draws { problem, rows, storms, seed, on_divergence } = *draws;
-    let path = metamodel.calibration.options.wind;
-    let (done, total) = (AtomicUsize::new(0), rows.len());
-    rows.par_iter()
-        .zip(storms)
-        .map_init(wind::Workspace::default, |workspace, (x, &k)| {
-            if observer.cancelled() {
-                return Err(Error::Cancelled);
-            }
-            let (p, coarse) = problem.sample_storm(x, path, seed, k, workspace)?;
-            let forces = coarse.on_grid(&problem.storm);
-            let predicted = match (metamodel.predict(problem, x, &forces), on_divergence) {
-                (Ok(predicted), _) => predicted,
-                (Err(Error::Numerical(_)), OnDivergence::Exceed) => return Ok(f64::INFINITY),
-                (Err(Error::Numerical(e)), OnDivergence::Fail) => {
-                    return Err(Error::Numerical(format!("sample {k}: {e}")));
-                }
-                (Err(e), _) => return Err(e),
-            };
-            let motion = ModalMotion::from_displacements(predicted, problem.storm.time_step);
-            let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p)?);
-            let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
-            let view = ResponseView::new(&metamodel.modes.shapes, &problem.structure, &motion, &model, &forces);
-            let peak = response.peak(&view)?;
-            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
-            Ok(peak)
-        })
-        .collect()
 }
 
 #[cfg(test)]

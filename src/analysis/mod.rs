@@ -7,6 +7,7 @@ mod climate;
 mod exceedance;
 mod fragility;
 mod hazard;
+mod motion_peaks;
 mod peaks;
 mod plot;
 mod response;

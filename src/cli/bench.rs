@@ -11,7 +11,7 @@ use crate::cancel::Never;
 use crate::dynamics::{integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::surrogate::{BatchWorkspace, CalibrationOptions, LANES, Metamodel, Silent, calibrate};
+use crate::surrogate::{BatchWorkspace, CalibrationOptions, LANES, Metamodel, Reduction, Silent, calibrate};
 use crate::uncertainty::rng_from_seed;
 use crate::wind::{ForceSource, Workspace};
 use clap::Args;
@@ -205,7 +205,8 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
         })?;
         let full = time(repetitions, |_| integrate_full(&system, &dampers, &floor_forces, dt, &Never))?;
         let mut workspace = BatchWorkspace::default();
-        let metamodel_batch = time(repetitions, |_| metamodel.peaks(p, &batch, &weights, &mut workspace))?;
+        let metamodel_batch =
+            time(repetitions, |_| metamodel.peaks(p, &batch, &Reduction::Combination(&weights), &mut workspace))?;
         let per_metamodel = metamodel_batch / LANES as f64;
         let rows = vec![
             row("per sample: wind, full field (40 floors) + projection", field),

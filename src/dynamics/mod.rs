@@ -12,3 +12,4 @@ pub use damper::{Dampers, ImplicitDamperSolve};
 pub use full::{FloorResponse, FullSystem, integrate_full};
 pub use modal::{ModalResponse, integrate_reduced};
 pub use motion::{ModalMotion, SampleModel};
+pub use power::power;

@@ -219,17 +219,17 @@ impl Metamodel {
         Ok(out)
     }
 
-    /// Peak |Σ_m w_m y_m(t)| over the storm for up to [`LANES`] samples run together, `samples[i]`
-    /// = (its number in the request, its inputs, its forces); the number names a diverging sample.
-    /// `workspace` holds the batch's buffers; keep one per thread across calls.
+    /// Peaks over the storm for up to [`LANES`] samples run together, `samples[i]` = (its number
+    /// in the request, its inputs, its forces), reduced as `reduction` says; the number names a
+    /// diverging sample. `workspace` holds the batch's buffers; keep one per thread across calls.
     pub fn peaks(
         &self,
         problem: &Problem,
-        samples: &[(usize, &[f64], &dyn ForceSource)],
-        weights: &[f64],
+        samples: &[BatchInput],
+        reduction: &Reduction,
         workspace: &mut Workspace,
     ) -> Result<Vec<f64>> {
-        self.run_peaks(problem, samples, weights, workspace)?
+        self.run_peaks(problem, samples, reduction, workspace)?
             .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))
     }
 
@@ -240,15 +240,15 @@ impl Metamodel {
     pub fn peaks_or_divergence(
         &self,
         problem: &Problem,
-        samples: &[(usize, &[f64], &dyn ForceSource)],
-        weights: &[f64],
+        samples: &[BatchInput],
+        reduction: &Reduction,
         workspace: &mut Workspace,
     ) -> Result<Vec<Option<f64>>> {
         let mut peaks = vec![None; samples.len()];
         let mut left: Vec<usize> = (0..samples.len()).collect();
         while !left.is_empty() {
             let batch: Vec<_> = left.iter().map(|&i| samples[i]).collect();
-            match self.run_peaks(problem, &batch, weights, workspace)? {
+            match self.run_peaks(problem, &batch, reduction, workspace)? {
                 Ok(values) => {
                     left.iter().zip(values).for_each(|(&i, value)| peaks[i] = Some(value));
                     break;
@@ -267,8 +267,8 @@ impl Metamodel {
     fn run_peaks(
         &self,
         problem: &Problem,
-        samples: &[(usize, &[f64], &dyn ForceSource)],
-        weights: &[f64],
+        samples: &[BatchInput],
+        reduction: &Reduction,
         workspace: &mut Workspace,
     ) -> Result<std::result::Result<Vec<f64>, BatchError>> {
         let mut levels = Vec::with_capacity(samples.len());
@@ -282,17 +282,67 @@ impl Metamodel {
             levels.push(level);
             batch.push(BatchSample { theta, forces });
         }
-        let gains: Vec<f64> = self.models.iter().zip(weights).map(|(model, w)| w * model.output_scale).collect();
-        let mut offsets = [0.0; LANES];
-        for (offset, level) in offsets.iter_mut().zip(&levels) {
-            *offset = level.iter().zip(weights).map(|(l, w)| w * l).sum();
+        let (programs, steps, time_step) = (self.programs(), problem.storm.steps(), problem.storm.time_step);
+        match reduction {
+            Reduction::Combination(weights) => {
+                let gains: Vec<f64> =
+                    self.models.iter().zip(*weights).map(|(model, w)| w * model.output_scale).collect();
+                let mut offsets = [0.0; LANES];
+                for (offset, level) in offsets.iter_mut().zip(&levels) {
+                    *offset = level.iter().zip(*weights).map(|(l, w)| w * l).sum();
+                }
+                let mut peaks = [0.0f64; LANES];
+                let mut sink = Sink::Peaks { gains: &gains, offsets, peaks: &mut peaks };
+                let run = batch::run(&programs, &batch, steps, time_step, workspace, &mut sink);
+                Ok(run.map(|()| peaks[..samples.len()].to_vec()))
+            }
+            Reduction::Motion(sink_for) => {
+                let inputs: Vec<&[f64]> = samples.iter().map(|s| s.1).collect();
+                let mut motion = sink_for(&inputs)?;
+                let modes = self.models.len();
+                let mut level = vec![[0.0; LANES]; modes];
+                for (lane, sample_levels) in levels.iter().enumerate() {
+                    (0..modes).for_each(|m| level[m][lane] = sample_levels[m]);
+                }
+                let (mut displacements, mut loads) = (Vec::new(), Vec::new());
+                let mut consume = |first: usize, outputs: &[Lanes], inputs: &[Lanes]| {
+                    displacements.clear();
+                    loads.clear();
+                    for (k, (y, q)) in outputs.iter().zip(inputs).enumerate() {
+                        let model = &self.models[k % modes];
+                        let level = &level[k % modes];
+                        displacements.push(std::array::from_fn(|l| model.output_scale.mul_add(y[l], level[l])));
+                        loads.push(q.map(|q| q * model.input_scale));
+                    }
+                    motion.take(first, &displacements, &loads);
+                };
+                let run = batch::run(&programs, &batch, steps, time_step, workspace, &mut Sink::Blocks(&mut consume));
+                Ok(run.map(|()| motion.finish()[..samples.len()].to_vec()))
+            }
         }
-        let mut peaks = [0.0f64; LANES];
-        let mut sink = Sink::Peaks { gains: &gains, offsets, peaks: &mut peaks };
-        let run =
-            batch::run(&self.programs(), &batch, problem.storm.steps(), problem.storm.time_step, workspace, &mut sink);
-        Ok(run.map(|()| peaks[..samples.len()].to_vec()))
     }
+}
+
+/// One sample of a batch: its number in the request, its physical inputs, its forces.
+pub type BatchInput<'a> = (usize, &'a [f64], &'a dyn ForceSource);
+
+/// How a batch's runs become one peak per lane.
+pub enum Reduction<'a> {
+    /// Peak |Σ_m w_m y_m(t)| of a fixed combination of the modal displacements (displacement,
+    /// drift, stroke), formed inside the free run's vectorised code.
+    Combination(&'a [f64]),
+    /// A response that needs the loads and the equations of motion, from a sink built for the
+    /// batch's inputs (lane i's physical inputs at i).
+    Motion(&'a (dyn Fn(&[&[f64]]) -> Result<Box<dyn MotionSink>> + Sync)),
+}
+
+/// What a batch's modal motion is reduced to, block by block: one peak per lane.
+pub trait MotionSink {
+    /// Steps `first..` of a block, every lane: `displacements[i·M + m]` the modal displacement
+    /// y_m (m) at step first + i and `loads[i·M + m]` the load deviation Q_m − Q̄_m (N) there.
+    fn take(&mut self, first: usize, displacements: &[Lanes], loads: &[Lanes]);
+    /// Per lane the peak, once the storm is over.
+    fn finish(&mut self) -> Lanes;
 }
 
 /// The error of a failed batch, naming the sample where it has a number.

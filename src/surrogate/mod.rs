@@ -22,8 +22,10 @@ pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};
 pub use design::{Design, design};
 pub use lanes::LANES;
+pub use lanes::Lanes;
 pub use metamodel::{
-    CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds, StaticResponse,
+    BatchInput, CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, MotionSink, Reduction,
+    StageSeconds, StaticResponse,
 };
 pub use options::{CalibrationOptions, MAX_EXPERIMENTS, WindCoverage};
 pub use parametrization::Parametrization;
