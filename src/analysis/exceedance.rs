@@ -5,7 +5,7 @@ use super::Response;
 use super::motion_peaks::motion_sink;
 use crate::error::{Error, Result};
 use crate::problem::Problem;
-use crate::surrogate::{BatchInput, BatchWorkspace, LANES, Metamodel, Observer, Progress, Reduction};
+use crate::surrogate::{BatchInput, BatchWorkspace, LANES, Metamodel, ModalScales, Observer, Progress, Reduction};
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use crate::wind::{self, ForceSource};
 use rayon::prelude::*;
@@ -170,7 +170,9 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
     assert_eq!(rows.len(), storms.len(), "one storm per row");
     let path = metamodel.calibration.options.wind;
     let weights = response.modal_weights(&metamodel.modes.shapes, &problem.structure)?;
-    let sink_for = |inputs: &[&[f64]]| motion_sink(problem, &metamodel.modes.shapes, response, inputs);
+    let sink_for = |inputs: &[&[f64]], scales: &ModalScales| {
+        motion_sink(problem, &metamodel.modes.shapes, response, inputs, scales)
+    };
     let reduction = match &weights {
         Some(weights) => Reduction::Combination(weights),
         None => Reduction::Motion(&sink_for),

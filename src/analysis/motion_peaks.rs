@@ -19,8 +19,8 @@
 use super::Response;
 use crate::dynamics::power;
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::surrogate::{LANES, Lanes, MotionSink};
+use crate::problem::{MAX_MODES, Problem};
+use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
 
 /// Steps whose bound is tested together before any of them is looked at one by one.
 const CHUNK: usize = 32;
@@ -28,15 +28,17 @@ const CHUNK: usize = 32;
 const BOUND_MARGIN: f64 = 1e-9;
 
 /// A sink for `response` (an acceleration or a damper force) over a batch whose lane i holds the
-/// physical inputs `inputs[i]`, the floors' modal weights read from `shapes[m][floor]`.
+/// physical inputs `inputs[i]` and whose blocks have `scales`, the floors' modal weights read from
+/// `shapes[m][floor]`.
 pub fn motion_sink(
     problem: &Problem,
     shapes: &[Vec<f64>],
     response: Response,
     inputs: &[&[f64]],
+    scales: &ModalScales,
 ) -> Result<Box<dyn MotionSink>> {
     response.check(&problem.structure)?;
-    let lanes = LaneModels::new(problem, inputs)?;
+    let lanes = LaneModels::new(problem, inputs, scales)?;
     let target = match response {
         Response::Acceleration { floor } => {
             Target::acceleration(&lanes, &shapes.iter().map(|s| s[floor - 1]).collect::<Vec<_>>())
@@ -50,43 +52,53 @@ pub fn motion_sink(
         }
         other => unreachable!("{} is a combination of the modal displacements", other.kind()),
     };
-    let modes = lanes.inverse_masses.len();
+    let zero = [[0.0; LANES]; MAX_MODES];
     Ok(Box::new(MotionPeaks {
         time_step: problem.storm.time_step,
+        modes: lanes.inverse_masses.len(),
         lanes,
         target,
-        rest: vec![[0.0; LANES]; modes],
-        previous: vec![[0.0; LANES]; modes],
-        current: vec![[0.0; LANES]; modes],
-        current_load: vec![[0.0; LANES]; modes],
+        rest: zero,
+        previous: zero,
+        current: zero,
+        current_load: zero,
         seen: 0,
-        chunk: Chunk::default(),
+        chunk: Chunk::empty(),
+        forces: vec![0.0; problem.structure.dampers.len()],
         best: [0.0; LANES],
     }))
 }
 
-/// The reduced models of a batch's samples, lane-major.
+/// The reduced models of a batch's samples, lane-major, with the blocks' scales folded in: the
+/// sink works on the scaled outputs ŷ_m and inputs q̂_m as the free run gives them, and on the
+/// scaled velocities ŷ'_m (y'_m = s_m ŷ'_m), so that nothing is converted step by step.
 struct LaneModels {
-    /// 1/M_m, 2ζω_m and ω_m² per mode, every lane.
+    /// 1/M_m (for h_d), r_m/M_m, 2ζω_m s_m and ω_m² s_m per mode, every lane (s_m, r_m: the
+    /// output and input scales).
     inverse_masses: Vec<Lanes>,
+    load_gains: Vec<Lanes>,
     damping: Vec<Lanes>,
     stiffness: Vec<Lanes>,
-    /// Per damper its coefficient c_d in every lane, and G_dm per mode (the same in every lane:
-    /// the shapes are fixed across samples).
+    /// Per damper its coefficient c_d in every lane, G_dm per mode and G_dm s_m, the damper's
+    /// velocity per scaled modal velocity (the same in every lane: the shapes are fixed across
+    /// samples).
     coefficients: Vec<Lanes>,
     map: Vec<Vec<f64>>,
+    velocity_map: Vec<Vec<f64>>,
     exponent: f64,
 }
 
 impl LaneModels {
-    fn new(problem: &Problem, inputs: &[&[f64]]) -> Result<Self> {
+    fn new(problem: &Problem, inputs: &[&[f64]], scales: &ModalScales) -> Result<Self> {
         let modes = problem.modes.count();
         let mut lanes = LaneModels {
             inverse_masses: vec![[0.0; LANES]; modes],
+            load_gains: vec![[0.0; LANES]; modes],
             damping: vec![[0.0; LANES]; modes],
             stiffness: vec![[0.0; LANES]; modes],
             coefficients: Vec::new(),
             map: Vec::new(),
+            velocity_map: Vec::new(),
             exponent: problem.damper_exponent,
         };
         for (lane, x) in inputs.iter().enumerate() {
@@ -95,8 +107,9 @@ impl LaneModels {
             for m in 0..modes.count() {
                 let omega = modes.frequencies[m];
                 lanes.inverse_masses[m][lane] = 1.0 / modes.modal_masses[m];
-                lanes.damping[m][lane] = 2.0 * p.damping_ratio * omega;
-                lanes.stiffness[m][lane] = omega * omega;
+                lanes.load_gains[m][lane] = scales.inputs[m] / modes.modal_masses[m];
+                lanes.damping[m][lane] = 2.0 * p.damping_ratio * omega * scales.outputs[m];
+                lanes.stiffness[m][lane] = omega * omega * scales.outputs[m];
             }
             if lane == 0 {
                 lanes.map = dampers
@@ -105,6 +118,8 @@ impl LaneModels {
                     .map(|row| row.iter().map(|g| g.1).collect())
                     .collect();
                 lanes.coefficients = vec![[0.0; LANES]; dampers.coefficients.len()];
+                lanes.velocity_map =
+                    lanes.map.iter().map(|g| g.iter().zip(&scales.outputs).map(|(g, s)| g * s).collect()).collect();
             }
             for (to, &c) in lanes.coefficients.iter_mut().zip(&dampers.coefficients) {
                 to[lane] = c;
@@ -142,7 +157,7 @@ impl Target {
         for l in 0..LANES {
             let total: f64 = h.iter().map(|h| h[l].abs()).sum();
             for (m, k) in k.iter_mut().enumerate() {
-                let used = || lanes.map.iter().zip(&h).filter(|(_, h)| h[l] != 0.0);
+                let used = || lanes.velocity_map.iter().zip(&h).filter(|(_, h)| h[l] != 0.0);
                 k[l] = if alpha <= 1.0 {
                     used().map(|(g, h)| h[l].abs() * g[m].abs()).sum()
                 } else {
@@ -155,46 +170,96 @@ impl Target {
     }
 }
 
-/// The steps of a chunk awaiting the bound's test: L and Σ_m K_m|ẏ_m| per step, and the modal
-/// velocities `velocities[i·M + m]`, every lane.
-#[derive(Default)]
+/// The steps of a chunk awaiting the bound's test, every lane: L and Σ_m K_m|ẏ_m| per step, the
+/// modal velocities, and the chunk's largest |L| and Σ_m K_m|ẏ_m|.
 struct Chunk {
-    linear: Vec<Lanes>,
-    speed: Vec<Lanes>,
-    velocities: Vec<Lanes>,
+    len: usize,
+    linear: [Lanes; CHUNK],
+    speed: [Lanes; CHUNK],
+    velocities: [[Lanes; MAX_MODES]; CHUNK],
+    largest_linear: Lanes,
+    largest_speed: Lanes,
 }
+
+impl Chunk {
+    fn empty() -> Box<Chunk> {
+        Box::new(Chunk {
+            len: 0,
+            linear: [[0.0; LANES]; CHUNK],
+            speed: [[0.0; LANES]; CHUNK],
+            velocities: [[[0.0; LANES]; MAX_MODES]; CHUNK],
+            largest_linear: [0.0; LANES],
+            largest_speed: [0.0; LANES],
+        })
+    }
+}
+
+/// Modal values of every lane, for up to [`MAX_MODES`] modes.
+type Modal = [Lanes; MAX_MODES];
 
 struct MotionPeaks {
     time_step: f64,
+    modes: usize,
     lanes: LaneModels,
     target: Target,
-    /// y(0), y(s − 1), y(s) and Q'(s) per mode: step s is processed when s + 1 arrives, for its
-    /// central difference.
-    rest: Vec<Lanes>,
-    previous: Vec<Lanes>,
-    current: Vec<Lanes>,
-    current_load: Vec<Lanes>,
+    /// y(0), and the last block's last two displacements and last loads: a step is processed
+    /// when its successor arrives, for its central difference.
+    rest: Modal,
+    previous: Modal,
+    current: Modal,
+    current_load: Modal,
     seen: usize,
-    chunk: Chunk,
+    chunk: Box<Chunk>,
+    /// Scratch: one lane's damper velocities, then f(v), at a step computed exactly.
+    forces: Vec<f64>,
     /// The running peak: |a| for an acceleration, max |v| for a damper force.
     best: Lanes,
 }
 
 impl MotionSink for MotionPeaks {
-    fn take(&mut self, _first: usize, displacements: &[Lanes], loads: &[Lanes]) {
-        let modes = self.current.len();
-        for (y, q) in displacements.chunks_exact(modes).zip(loads.chunks_exact(modes)) {
-            self.arrive(y, q);
+    fn take(&mut self, _first: usize, outputs: &[Lanes], inputs: &[Lanes]) {
+        let modes = self.modes;
+        let steps = outputs.len() / modes;
+        let at = |k: usize| &outputs[k * modes..(k + 1) * modes];
+        let load_at = |k: usize| &inputs[k * modes..(k + 1) * modes];
+        let (previous, current, current_load) = (self.previous, self.current, self.current_load);
+        let mut velocities = [[0.0; LANES]; MAX_MODES];
+        // Block step i is the successor of the step processed with it: s = (first + i) − 1.
+        for i in 0..steps {
+            let seen = self.seen + i;
+            if seen == 0 {
+                self.rest[..modes].copy_from_slice(at(0));
+                continue;
+            }
+            let (here, load) =
+                if i == 0 { (&current[..modes], &current_load[..modes]) } else { (at(i - 1), load_at(i - 1)) };
+            let (before, scale) = match (seen, i) {
+                (1, _) => (here, 1.0 / self.time_step),
+                (_, 0) => (&previous[..modes], 0.5 / self.time_step),
+                (_, 1) => (&current[..modes], 0.5 / self.time_step),
+                _ => (at(i - 2), 0.5 / self.time_step),
+            };
+            for (m, (after, before)) in at(i).iter().zip(before).enumerate() {
+                velocities[m] = std::array::from_fn(|l| (after[l] - before[l]) * scale);
+            }
+            self.process(here, &velocities[..modes], load);
+        }
+        if steps > 0 {
+            self.previous[..modes].copy_from_slice(if steps > 1 { at(steps - 2) } else { &current[..modes] });
+            self.current[..modes].copy_from_slice(at(steps - 1));
+            self.current_load[..modes].copy_from_slice(load_at(steps - 1));
+            self.seen += steps;
         }
     }
 
     fn finish(&mut self) -> Lanes {
+        let modes = self.modes;
         if self.seen > 0 {
             let scale = if self.seen > 1 { 1.0 / self.time_step } else { 0.0 };
-            let velocities: Vec<Lanes> = (0..self.current.len())
-                .map(|m| std::array::from_fn(|l| (self.current[m][l] - self.previous[m][l]) * scale))
-                .collect();
-            self.process(&velocities);
+            let (current, previous, load) = (self.current, self.previous, self.current_load);
+            let velocities: Vec<Lanes> =
+                (0..modes).map(|m| std::array::from_fn(|l| (current[m][l] - previous[m][l]) * scale)).collect();
+            self.process(&current[..modes], &velocities, &load[..modes]);
         }
         self.flush();
         match self.target {
@@ -207,54 +272,43 @@ impl MotionSink for MotionPeaks {
 }
 
 impl MotionPeaks {
-    /// Step `seen` arrives: the one before it now has its central difference.
-    fn arrive(&mut self, y: &[Lanes], q: &[Lanes]) {
-        if self.seen == 0 {
-            self.rest.copy_from_slice(y);
-        } else {
-            let (from, scale) = if self.seen == 1 {
-                (&self.current, 1.0 / self.time_step)
-            } else {
-                (&self.previous, 0.5 / self.time_step)
-            };
-            let velocities: Vec<Lanes> =
-                y.iter().zip(from).map(|(y, f)| std::array::from_fn(|l| (y[l] - f[l]) * scale)).collect();
-            self.process(&velocities);
-        }
-        self.previous.copy_from_slice(&self.current);
-        self.current.copy_from_slice(y);
-        self.current_load.copy_from_slice(q);
-        self.seen += 1;
-    }
-
-    /// The step held in `current` with its velocities.
-    fn process(&mut self, velocities: &[Lanes]) {
+    /// Step s: its displacements, velocities and load deviations, every mode and lane.
+    #[inline]
+    fn process(&mut self, y: &[Lanes], velocities: &[Lanes], q: &[Lanes]) {
         let lanes = &self.lanes;
         match &self.target {
             Target::DamperForce { damper } => {
-                let g = &lanes.map[*damper];
-                for l in 0..LANES {
-                    let v: f64 = velocities.iter().zip(g).map(|(v, g)| g * v[l]).sum();
-                    self.best[l] = self.best[l].max(v.abs());
+                let g = &lanes.velocity_map[*damper];
+                let mut v = [0.0; LANES];
+                for (g, velocity) in g.iter().zip(velocities) {
+                    (0..LANES).for_each(|l| v[l] = g.mul_add(velocity[l], v[l]));
                 }
+                (0..LANES).for_each(|l| self.best[l] = self.best[l].max(v[l].abs()));
             }
             Target::Acceleration { weights, k, .. } => {
                 let mut linear = [0.0; LANES];
                 let mut speed = [0.0; LANES];
                 for (m, v) in velocities.iter().enumerate() {
-                    let (y, q, rest) = (&self.current[m], &self.current_load[m], &self.rest[m]);
+                    let (y, q, rest) = (&y[m], &q[m], &self.rest[m]);
+                    let (load_gain, damping, stiffness) =
+                        (&lanes.load_gains[m], &lanes.damping[m], &lanes.stiffness[m]);
                     for l in 0..LANES {
-                        let modal = q[l] * lanes.inverse_masses[m][l]
-                            - lanes.damping[m][l] * v[l]
-                            - lanes.stiffness[m][l] * (y[l] - rest[l]);
+                        let modal = q[l] * load_gain[l] - damping[l] * v[l] - stiffness[l] * (y[l] - rest[l]);
                         linear[l] = weights[m].mul_add(modal, linear[l]);
                         speed[l] = k[m][l].mul_add(v[l].abs(), speed[l]);
                     }
                 }
-                self.chunk.linear.push(linear);
-                self.chunk.speed.push(speed);
-                self.chunk.velocities.extend_from_slice(velocities);
-                if self.chunk.linear.len() == CHUNK {
+                let chunk = &mut self.chunk;
+                let i = chunk.len;
+                for l in 0..LANES {
+                    chunk.largest_linear[l] = chunk.largest_linear[l].max(linear[l].abs());
+                    chunk.largest_speed[l] = chunk.largest_speed[l].max(speed[l]);
+                }
+                chunk.linear[i] = linear;
+                chunk.speed[i] = speed;
+                chunk.velocities[i][..velocities.len()].copy_from_slice(velocities);
+                chunk.len += 1;
+                if chunk.len == CHUNK {
                     self.flush();
                 }
             }
@@ -262,37 +316,44 @@ impl MotionPeaks {
     }
 
     /// Tests the chunk's steps against the running peak, lane by lane, and computes the damper
-    /// term exactly where the bound does not rule a step out.
+    /// term exactly where the bound does not rule a step out. The powers are taken over arrays
+    /// (independent, so they overlap in the processor rather than wait on each other).
     fn flush(&mut self) {
         let Target::Acceleration { h, bound, .. } = &self.target else { return };
-        let (lanes, chunk, modes) = (&self.lanes, &self.chunk, self.current.len());
+        let (lanes, chunk, modes) = (&self.lanes, &mut self.chunk, self.modes);
         let alpha = lanes.exponent;
-        let most = |l: usize| -> f64 { (1.0 + BOUND_MARGIN) * bound[l] };
+        let inflate = 1.0 + BOUND_MARGIN;
+        let chunk_bounds: Lanes = std::array::from_fn(|l| {
+            inflate * (chunk.largest_linear[l] + bound[l] * power(chunk.largest_speed[l], alpha))
+        });
+        let (mut step_bounds, forces) = ([0.0; CHUNK], &mut self.forces);
         for (l, best) in self.best.iter_mut().enumerate() {
-            let largest_linear = chunk.linear.iter().fold(0.0, |a: f64, x| a.max(x[l].abs()));
-            let largest_speed = chunk.speed.iter().fold(0.0, |a: f64, x| a.max(x[l]));
-            if (1.0 + BOUND_MARGIN) * largest_linear + most(l) * power(largest_speed, alpha) <= *best {
+            if chunk.len == 0 || chunk_bounds[l] <= *best {
                 continue;
             }
-            for (i, (linear, speed)) in chunk.linear.iter().zip(&chunk.speed).enumerate() {
-                if (1.0 + BOUND_MARGIN) * linear[l].abs() + most(l) * power(speed[l], alpha) <= *best {
+            for (i, to) in step_bounds[..chunk.len].iter_mut().enumerate() {
+                *to = inflate * (chunk.linear[i][l].abs() + bound[l] * power(chunk.speed[i][l], alpha));
+            }
+            // The step with the largest bound first: it most likely raises the peak, which then
+            // rules out more of the others.
+            let first = (0..chunk.len).max_by(|&a, &b| step_bounds[a].total_cmp(&step_bounds[b])).unwrap_or(0);
+            for i in std::iter::once(first).chain((0..chunk.len).filter(|&i| i != first)) {
+                if step_bounds[i] <= *best {
                     continue;
                 }
-                let v = &chunk.velocities[i * modes..(i + 1) * modes];
-                let dampers: f64 = lanes
-                    .map
-                    .iter()
-                    .zip(h)
-                    .map(|(g, h)| {
-                        let velocity: f64 = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
-                        h[l] * power(velocity.abs(), alpha).copysign(velocity)
-                    })
-                    .sum();
-                *best = best.max((linear[l] - dampers).abs());
+                let v = &chunk.velocities[i];
+                for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
+                    *force = (0..modes).map(|m| g[m] * v[m][l]).sum();
+                }
+                for force in forces.iter_mut() {
+                    *force = power(force.abs(), alpha).copysign(*force);
+                }
+                let dampers: f64 = forces.iter().zip(h).map(|(f, h)| h[l] * f).sum();
+                *best = best.max((chunk.linear[i][l] - dampers).abs());
             }
         }
-        self.chunk.linear.clear();
-        self.chunk.speed.clear();
-        self.chunk.velocities.clear();
+        chunk.len = 0;
+        chunk.largest_linear = [0.0; LANES];
+        chunk.largest_speed = [0.0; LANES];
     }
 }

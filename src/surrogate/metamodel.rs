@@ -298,24 +298,13 @@ impl Metamodel {
             }
             Reduction::Motion(sink_for) => {
                 let inputs: Vec<&[f64]> = samples.iter().map(|s| s.1).collect();
-                let mut motion = sink_for(&inputs)?;
-                let modes = self.models.len();
-                let mut level = vec![[0.0; LANES]; modes];
-                for (lane, sample_levels) in levels.iter().enumerate() {
-                    (0..modes).for_each(|m| level[m][lane] = sample_levels[m]);
-                }
-                let (mut displacements, mut loads) = (Vec::new(), Vec::new());
-                let mut consume = |first: usize, outputs: &[Lanes], inputs: &[Lanes]| {
-                    displacements.clear();
-                    loads.clear();
-                    for (k, (y, q)) in outputs.iter().zip(inputs).enumerate() {
-                        let model = &self.models[k % modes];
-                        let level = &level[k % modes];
-                        displacements.push(std::array::from_fn(|l| model.output_scale.mul_add(y[l], level[l])));
-                        loads.push(q.map(|q| q * model.input_scale));
-                    }
-                    motion.take(first, &displacements, &loads);
+                let scales = ModalScales {
+                    outputs: self.models.iter().map(|m| m.output_scale).collect(),
+                    inputs: self.models.iter().map(|m| m.input_scale).collect(),
                 };
+                let mut motion = sink_for(&inputs, &scales)?;
+                let mut consume =
+                    |first: usize, outputs: &[Lanes], inputs: &[Lanes]| motion.take(first, outputs, inputs);
                 let run = batch::run(&programs, &batch, steps, time_step, workspace, &mut Sink::Blocks(&mut consume));
                 Ok(run.map(|()| motion.finish()[..samples.len()].to_vec()))
             }
@@ -331,16 +320,26 @@ pub enum Reduction<'a> {
     /// Peak |Σ_m w_m y_m(t)| of a fixed combination of the modal displacements (displacement,
     /// drift, stroke), formed inside the free run's vectorised code.
     Combination(&'a [f64]),
-    /// A response that needs the loads and the equations of motion, from a sink built for the
-    /// batch's inputs (lane i's physical inputs at i).
-    Motion(&'a (dyn Fn(&[&[f64]]) -> Result<Box<dyn MotionSink>> + Sync)),
+    /// A response of the motion about its start and of the loads (velocities, accelerations,
+    /// damper forces), by a sink built for the batch: lane i's physical inputs at i, and the
+    /// scales of its blocks.
+    Motion(&'a (dyn Fn(&[&[f64]], &ModalScales) -> Result<Box<dyn MotionSink>> + Sync)),
+}
+
+/// The scales of the free run's blocks, per mode: the output ŷ_m is (y_m − static level)/outputs[m]
+/// and the input q̂_m is (Q_m − Q̄_m)/inputs[m]. A response of the motion about its start needs no
+/// level: y_m(t) − y_m(0) = outputs[m]·(ŷ_m(t) − ŷ_m(0)).
+#[derive(Debug, Clone)]
+pub struct ModalScales {
+    pub outputs: Vec<f64>,
+    pub inputs: Vec<f64>,
 }
 
 /// What a batch's modal motion is reduced to, block by block: one peak per lane.
 pub trait MotionSink {
-    /// Steps `first..` of a block, every lane: `displacements[i·M + m]` the modal displacement
-    /// y_m (m) at step first + i and `loads[i·M + m]` the load deviation Q_m − Q̄_m (N) there.
-    fn take(&mut self, first: usize, displacements: &[Lanes], loads: &[Lanes]);
+    /// Steps `first..` of a block, every lane: `outputs[i·M + m]` the scaled output ŷ_m at step
+    /// first + i and `inputs[i·M + m]` the scaled input q̂_m it read (see [`ModalScales`]).
+    fn take(&mut self, first: usize, outputs: &[Lanes], inputs: &[Lanes]);
     /// Per lane the peak, once the storm is over.
     fn finish(&mut self) -> Lanes;
 }

@@ -24,8 +24,8 @@ pub use design::{Design, design};
 pub use lanes::LANES;
 pub use lanes::Lanes;
 pub use metamodel::{
-    BatchInput, CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, MotionSink, Reduction,
-    StageSeconds, StaticResponse,
+    BatchInput, CalibrationSummary, Metamodel, ModalBasis, ModalScales, ModeDiagnostics, ModeModel, MotionSink,
+    Reduction, StageSeconds, StaticResponse,
 };
 pub use options::{CalibrationOptions, MAX_EXPERIMENTS, WindCoverage};
 pub use parametrization::Parametrization;
