@@ -22,7 +22,7 @@ use crate::error::{Error, Result};
 use crate::problem::{MAX_MODES, Problem};
 use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
 
-/// Steps whose bound is tested together before any of them is looked at one by one.
+/// Steps whose bound is taken together before any of them is looked at one by one.
 const CHUNK: usize = 32;
 /// Relative inflation of the bound against rounding.
 const BOUND_MARGIN: f64 = 1e-9;
@@ -61,9 +61,9 @@ pub fn motion_sink(
         rest: zero,
         previous: zero,
         current: zero,
-        current_load: zero,
+        current_input: zero,
         seen: 0,
-        chunk: Chunk::empty(),
+        steps: Steps::default(),
         forces: vec![0.0; problem.structure.dampers.len()],
         best: [0.0; LANES],
     }))
@@ -131,9 +131,17 @@ impl LaneModels {
 
 /// What is tracked.
 enum Target {
-    /// A floor's acceleration: its modal weights φ_m, h_d per damper and the bound's P and K_m
-    /// (|N| ≤ P (Σ_m K_m |ẏ_m|)^α), every lane.
-    Acceleration { weights: Vec<f64>, h: Vec<Lanes>, bound: Lanes, k: Vec<Lanes> },
+    /// A floor's acceleration, every lane: L = Σ_m (loads_m q̂_m + velocities_m ŷ'_m +
+    /// displacements_m (ŷ_m − ŷ_m(0))) with φ_m folded in, h_d per damper and the bound's P and
+    /// K_m (|N| ≤ P (Σ_m K_m |ŷ'_m|)^α).
+    Acceleration {
+        loads: Vec<Lanes>,
+        velocities: Vec<Lanes>,
+        displacements: Vec<Lanes>,
+        h: Vec<Lanes>,
+        bound: Lanes,
+        k: Vec<Lanes>,
+    },
     /// A damper's force: the peak is c·max|v|^α, so only its fastest velocity is tracked.
     DamperForce { damper: usize },
 }
@@ -166,32 +174,27 @@ impl Target {
             }
             bound[l] = if alpha <= 1.0 { total.powf(1.0 - alpha) } else { total };
         }
-        Target::Acceleration { weights: weights.to_vec(), h, bound, k }
+        let fold = |per_mode: &[Lanes], sign: f64| -> Vec<Lanes> {
+            per_mode.iter().zip(weights).map(|(c, w)| c.map(|c| sign * w * c)).collect()
+        };
+        Target::Acceleration {
+            loads: fold(&lanes.load_gains, 1.0),
+            velocities: fold(&lanes.damping, -1.0),
+            displacements: fold(&lanes.stiffness, -1.0),
+            h,
+            bound,
+            k,
+        }
     }
 }
 
-/// The steps of a chunk awaiting the bound's test, every lane: L and Σ_m K_m|ẏ_m| per step, the
-/// modal velocities, and the chunk's largest |L| and Σ_m K_m|ẏ_m|.
-struct Chunk {
-    len: usize,
-    linear: [Lanes; CHUNK],
-    speed: [Lanes; CHUNK],
-    velocities: [[Lanes; MAX_MODES]; CHUNK],
-    largest_linear: Lanes,
-    largest_speed: Lanes,
-}
-
-impl Chunk {
-    fn empty() -> Box<Chunk> {
-        Box::new(Chunk {
-            len: 0,
-            linear: [[0.0; LANES]; CHUNK],
-            speed: [[0.0; LANES]; CHUNK],
-            velocities: [[[0.0; LANES]; MAX_MODES]; CHUNK],
-            largest_linear: [0.0; LANES],
-            largest_speed: [0.0; LANES],
-        })
-    }
+/// One block's processed steps, every lane: the modal velocities `velocities[i·M + m]`, and for an
+/// acceleration L and Σ_m K_m|ẏ_m| per step.
+#[derive(Default)]
+struct Steps {
+    velocities: Vec<Lanes>,
+    linear: Vec<Lanes>,
+    speed: Vec<Lanes>,
 }
 
 /// Modal values of every lane, for up to [`MAX_MODES`] modes.
@@ -202,14 +205,14 @@ struct MotionPeaks {
     modes: usize,
     lanes: LaneModels,
     target: Target,
-    /// y(0), and the last block's last two displacements and last loads: a step is processed
-    /// when its successor arrives, for its central difference.
+    /// ŷ(0), and the last block's last two outputs and last inputs: a step is processed once its
+    /// successor has arrived, for its central difference.
     rest: Modal,
     previous: Modal,
     current: Modal,
-    current_load: Modal,
+    current_input: Modal,
     seen: usize,
-    chunk: Box<Chunk>,
+    steps: Steps,
     /// Scratch: one lane's damper velocities, then f(v), at a step computed exactly.
     forces: Vec<f64>,
     /// The running peak: |a| for an acceleration, max |v| for a damper force.
@@ -219,49 +222,52 @@ struct MotionPeaks {
 impl MotionSink for MotionPeaks {
     fn take(&mut self, _first: usize, outputs: &[Lanes], inputs: &[Lanes]) {
         let modes = self.modes;
-        let steps = outputs.len() / modes;
+        let count = outputs.len() / modes;
         let at = |k: usize| &outputs[k * modes..(k + 1) * modes];
-        let load_at = |k: usize| &inputs[k * modes..(k + 1) * modes];
-        let (previous, current, current_load) = (self.previous, self.current, self.current_load);
-        let mut velocities = [[0.0; LANES]; MAX_MODES];
-        // Block step i is the successor of the step processed with it: s = (first + i) − 1.
-        for i in 0..steps {
+        let input_at = |k: usize| &inputs[k * modes..(k + 1) * modes];
+        let (previous, current, current_input) = (self.previous, self.current, self.current_input);
+        self.steps.velocities.clear();
+        // Block step i is the successor of the step processed with it, s = (first + i) − 1.
+        for i in 0..count {
             let seen = self.seen + i;
             if seen == 0 {
                 self.rest[..modes].copy_from_slice(at(0));
                 continue;
             }
-            let (here, load) =
-                if i == 0 { (&current[..modes], &current_load[..modes]) } else { (at(i - 1), load_at(i - 1)) };
+            let (here, input) =
+                if i == 0 { (&current[..modes], &current_input[..modes]) } else { (at(i - 1), input_at(i - 1)) };
             let (before, scale) = match (seen, i) {
                 (1, _) => (here, 1.0 / self.time_step),
                 (_, 0) => (&previous[..modes], 0.5 / self.time_step),
                 (_, 1) => (&current[..modes], 0.5 / self.time_step),
                 _ => (at(i - 2), 0.5 / self.time_step),
             };
-            for (m, (after, before)) in at(i).iter().zip(before).enumerate() {
-                velocities[m] = std::array::from_fn(|l| (after[l] - before[l]) * scale);
+            for (after, before) in at(i).iter().zip(before) {
+                self.steps.velocities.push(std::array::from_fn(|l| (after[l] - before[l]) * scale));
             }
-            self.process(here, &velocities[..modes], load);
+            self.linear_part(here, input);
         }
-        if steps > 0 {
-            self.previous[..modes].copy_from_slice(if steps > 1 { at(steps - 2) } else { &current[..modes] });
-            self.current[..modes].copy_from_slice(at(steps - 1));
-            self.current_load[..modes].copy_from_slice(load_at(steps - 1));
-            self.seen += steps;
+        if count > 0 {
+            self.previous[..modes].copy_from_slice(if count > 1 { at(count - 2) } else { &current[..modes] });
+            self.current[..modes].copy_from_slice(at(count - 1));
+            self.current_input[..modes].copy_from_slice(input_at(count - 1));
+            self.seen += count;
         }
+        self.reduce();
     }
 
     fn finish(&mut self) -> Lanes {
         let modes = self.modes;
+        self.steps.velocities.clear();
         if self.seen > 0 {
             let scale = if self.seen > 1 { 1.0 / self.time_step } else { 0.0 };
-            let (current, previous, load) = (self.current, self.previous, self.current_load);
-            let velocities: Vec<Lanes> =
-                (0..modes).map(|m| std::array::from_fn(|l| (current[m][l] - previous[m][l]) * scale)).collect();
-            self.process(&current[..modes], &velocities, &load[..modes]);
+            let (current, previous, input) = (self.current, self.previous, self.current_input);
+            for m in 0..modes {
+                self.steps.velocities.push(std::array::from_fn(|l| (current[m][l] - previous[m][l]) * scale));
+            }
+            self.linear_part(&current[..modes], &input[..modes]);
         }
-        self.flush();
+        self.reduce();
         match self.target {
             Target::Acceleration { .. } => self.best,
             Target::DamperForce { damper } => std::array::from_fn(|l| {
@@ -272,88 +278,113 @@ impl MotionSink for MotionPeaks {
 }
 
 impl MotionPeaks {
-    /// Step s: its displacements, velocities and load deviations, every mode and lane.
-    #[inline]
-    fn process(&mut self, y: &[Lanes], velocities: &[Lanes], q: &[Lanes]) {
-        let lanes = &self.lanes;
-        match &self.target {
-            Target::DamperForce { damper } => {
-                let g = &lanes.velocity_map[*damper];
-                let mut v = [0.0; LANES];
-                for (g, velocity) in g.iter().zip(velocities) {
-                    (0..LANES).for_each(|l| v[l] = g.mul_add(velocity[l], v[l]));
-                }
-                (0..LANES).for_each(|l| self.best[l] = self.best[l].max(v[l].abs()));
-            }
-            Target::Acceleration { weights, k, .. } => {
-                let mut linear = [0.0; LANES];
-                let mut speed = [0.0; LANES];
-                for (m, v) in velocities.iter().enumerate() {
-                    let (y, q, rest) = (&y[m], &q[m], &self.rest[m]);
-                    let (load_gain, damping, stiffness) =
-                        (&lanes.load_gains[m], &lanes.damping[m], &lanes.stiffness[m]);
-                    for l in 0..LANES {
-                        let modal = q[l] * load_gain[l] - damping[l] * v[l] - stiffness[l] * (y[l] - rest[l]);
-                        linear[l] = weights[m].mul_add(modal, linear[l]);
-                        speed[l] = k[m][l].mul_add(v[l].abs(), speed[l]);
-                    }
-                }
-                let chunk = &mut self.chunk;
-                let i = chunk.len;
-                for l in 0..LANES {
-                    chunk.largest_linear[l] = chunk.largest_linear[l].max(linear[l].abs());
-                    chunk.largest_speed[l] = chunk.largest_speed[l].max(speed[l]);
-                }
-                chunk.linear[i] = linear;
-                chunk.speed[i] = speed;
-                chunk.velocities[i][..velocities.len()].copy_from_slice(velocities);
-                chunk.len += 1;
-                if chunk.len == CHUNK {
-                    self.flush();
-                }
+    /// For an acceleration, L and Σ_m K_m|ŷ'_m| of the step whose velocities were pushed last,
+    /// from its outputs `y` and inputs `q`.
+    #[inline(always)]
+    fn linear_part(&mut self, y: &[Lanes], q: &[Lanes]) {
+        let Target::Acceleration { loads, velocities, displacements, k, .. } = &self.target else { return };
+        let steps = &mut self.steps;
+        let v = &steps.velocities[steps.velocities.len() - self.modes..];
+        let mut linear = [0.0; LANES];
+        let mut speed = [0.0; LANES];
+        for m in 0..self.modes {
+            let (y, q, v, rest) = (&y[m], &q[m], &v[m], &self.rest[m]);
+            let (load, velocity, displacement, k) = (&loads[m], &velocities[m], &displacements[m], &k[m]);
+            for l in 0..LANES {
+                linear[l] = load[l]
+                    .mul_add(q[l], velocity[l].mul_add(v[l], displacement[l].mul_add(y[l] - rest[l], linear[l])));
+                speed[l] = k[l].mul_add(v[l].abs(), speed[l]);
             }
         }
+        steps.linear.push(linear);
+        steps.speed.push(speed);
     }
 
-    /// Tests the chunk's steps against the running peak, lane by lane, and computes the damper
-    /// term exactly where the bound does not rule a step out. The powers are taken over arrays
-    /// (independent, so they overlap in the processor rather than wait on each other).
-    fn flush(&mut self) {
+    /// The block's processed steps into the running peaks.
+    fn reduce(&mut self) {
+        match &self.target {
+            Target::DamperForce { damper } => {
+                let g = &self.lanes.velocity_map[*damper];
+                for step in self.steps.velocities.chunks_exact(self.modes) {
+                    let mut v = [0.0; LANES];
+                    for (g, velocity) in g.iter().zip(step) {
+                        (0..LANES).for_each(|l| v[l] = g.mul_add(velocity[l], v[l]));
+                    }
+                    (0..LANES).for_each(|l| self.best[l] = self.best[l].max(v[l].abs()));
+                }
+            }
+            Target::Acceleration { .. } => self.reduce_accelerations(),
+        }
+        self.steps.velocities.clear();
+        self.steps.linear.clear();
+        self.steps.speed.clear();
+    }
+
+    /// Per lane, the block's chunks of [`CHUNK`] steps in decreasing order of their bound, and in
+    /// a chunk its steps likewise, computed exactly until the bound falls below the running peak:
+    /// the largest accelerations come first and rule out the rest.
+    fn reduce_accelerations(&mut self) {
         let Target::Acceleration { h, bound, .. } = &self.target else { return };
-        let (lanes, chunk, modes) = (&self.lanes, &mut self.chunk, self.modes);
+        let (lanes, steps, modes, forces) = (&self.lanes, &self.steps, self.modes, &mut self.forces);
         let alpha = lanes.exponent;
-        let inflate = 1.0 + BOUND_MARGIN;
-        let chunk_bounds: Lanes = std::array::from_fn(|l| {
-            inflate * (chunk.largest_linear[l] + bound[l] * power(chunk.largest_speed[l], alpha))
-        });
-        let (mut step_bounds, forces) = ([0.0; CHUNK], &mut self.forces);
+        let most = |l: usize, linear: f64, speed: f64| (1.0 + BOUND_MARGIN) * (linear + bound[l] * power(speed, alpha));
+        let count = steps.linear.len();
+        let mut chunks: Vec<(f64, usize)> = Vec::with_capacity(count.div_ceil(CHUNK));
+        let mut candidates: Vec<(f64, usize)> = Vec::with_capacity(CHUNK);
+        // Each chunk's largest |L| and Σ_m K_m|ŷ'_m|, every lane in one pass.
+        let largest: Vec<(Lanes, Lanes)> = (0..count)
+            .step_by(CHUNK)
+            .map(|first| {
+                let range = first..(first + CHUNK).min(count);
+                let (mut linear, mut speed) = ([0.0f64; LANES], [0.0f64; LANES]);
+                for (x, s) in steps.linear[range.clone()].iter().zip(&steps.speed[range]) {
+                    (0..LANES).for_each(|l| {
+                        linear[l] = linear[l].max(x[l].abs());
+                        speed[l] = speed[l].max(s[l]);
+                    });
+                }
+                (linear, speed)
+            })
+            .collect();
         for (l, best) in self.best.iter_mut().enumerate() {
-            if chunk.len == 0 || chunk_bounds[l] <= *best {
-                continue;
-            }
-            for (i, to) in step_bounds[..chunk.len].iter_mut().enumerate() {
-                *to = inflate * (chunk.linear[i][l].abs() + bound[l] * power(chunk.speed[i][l], alpha));
-            }
-            // The step with the largest bound first: it most likely raises the peak, which then
-            // rules out more of the others.
-            let first = (0..chunk.len).max_by(|&a, &b| step_bounds[a].total_cmp(&step_bounds[b])).unwrap_or(0);
-            for i in std::iter::once(first).chain((0..chunk.len).filter(|&i| i != first)) {
-                if step_bounds[i] <= *best {
-                    continue;
+            // A chunk with |L| ≤ best/2 and P S^α ≤ best/2 cannot beat the peak; most chunks are
+            // ruled out so, by comparisons with one power per lane and block.
+            let half = 0.5 * *best / (1.0 + BOUND_MARGIN);
+            let slow = if bound[l] > 0.0 { power(half / bound[l], 1.0 / alpha) } else { f64::INFINITY };
+            chunks.clear();
+            chunks.extend(
+                largest
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, (linear, speed))| linear[l] > half || speed[l] > slow)
+                    .map(|(c, (linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
+            );
+            chunks.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            for &(chunk_bound, first) in &chunks {
+                if chunk_bound <= *best {
+                    break;
                 }
-                let v = &chunk.velocities[i];
-                for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
-                    *force = (0..modes).map(|m| g[m] * v[m][l]).sum();
+                candidates.clear();
+                candidates.extend(
+                    (first..(first + CHUNK).min(count))
+                        .map(|i| (most(l, steps.linear[i][l].abs(), steps.speed[i][l]), i)),
+                );
+                candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+                for &(step_bound, i) in &candidates {
+                    if step_bound <= *best {
+                        break;
+                    }
+                    let v = &steps.velocities[i * modes..(i + 1) * modes];
+                    for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
+                        *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
+                    }
+                    for force in forces.iter_mut() {
+                        *force = power(force.abs(), alpha).copysign(*force);
+                    }
+                    let dampers: f64 = forces.iter().zip(h).map(|(f, h)| h[l] * f).sum();
+                    *best = best.max((steps.linear[i][l] - dampers).abs());
                 }
-                for force in forces.iter_mut() {
-                    *force = power(force.abs(), alpha).copysign(*force);
-                }
-                let dampers: f64 = forces.iter().zip(h).map(|(f, h)| h[l] * f).sum();
-                *best = best.max((chunk.linear[i][l] - dampers).abs());
             }
         }
-        chunk.len = 0;
-        chunk.largest_linear = [0.0; LANES];
-        chunk.largest_speed = [0.0; LANES];
     }
 }
