@@ -171,7 +171,7 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
     let path = metamodel.calibration.options.wind;
     let weights = response.modal_weights(&metamodel.modes.shapes, &problem.structure)?;
     let sink_for = |inputs: &[&[f64]], scales: &ModalScales| {
-        motion_sink(problem, &metamodel.modes.shapes, response, inputs, scales)
+        motion_sink(problem, &metamodel.modes.shapes, &[response], inputs, scales)
     };
     let reduction = match &weights {
         Some(weights) => Reduction::Combination(weights),
@@ -200,11 +200,15 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
                     .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
                     .collect();
                 let peaks = match on_divergence {
-                    OnDivergence::Fail => metamodel.peaks(problem, &batch, &reduction, batch_workspace)?,
+                    OnDivergence::Fail => metamodel
+                        .peaks(problem, &batch, &reduction, batch_workspace)?
+                        .into_iter()
+                        .map(|p| p[0])
+                        .collect(),
                     OnDivergence::Exceed => metamodel
                         .peaks_or_divergence(problem, &batch, &reduction, batch_workspace)?
                         .into_iter()
-                        .map(|peak| peak.unwrap_or(f64::INFINITY))
+                        .map(|peak| peak.map_or(f64::INFINITY, |p| p[0]))
                         .collect(),
                 };
                 let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();

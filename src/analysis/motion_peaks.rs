@@ -27,45 +27,60 @@ const CHUNK: usize = 32;
 /// Relative inflation of the bound against rounding.
 const BOUND_MARGIN: f64 = 1e-9;
 
-/// A sink for `response` (an acceleration or a damper force) over a batch whose lane i holds the
-/// physical inputs `inputs[i]` and whose blocks have `scales`, the floors' modal weights read from
-/// `shapes[m][floor]`.
+/// A sink for `responses` over a batch whose lane i holds the physical inputs `inputs[i]` and
+/// whose blocks have `scales`, the floors' modal weights read from `shapes[m][floor]`: one peak per
+/// response and lane.
 pub fn motion_sink(
     problem: &Problem,
     shapes: &[Vec<f64>],
-    response: Response,
+    responses: &[Response],
     inputs: &[&[f64]],
     scales: &ModalScales,
 ) -> Result<Box<dyn MotionSink>> {
-    response.check(&problem.structure)?;
     let lanes = LaneModels::new(problem, inputs, scales)?;
-    let target = match response {
-        Response::Acceleration { floor } => {
-            Target::acceleration(&lanes, &shapes.iter().map(|s| s[floor - 1]).collect::<Vec<_>>())
-        }
-        Response::DamperForce { floor } => {
-            let damper = problem.structure.dampers.iter().position(|d| d.upper_floor + 1 == floor);
-            Target::DamperForce {
-                damper: damper
-                    .ok_or_else(|| Error::invalid("floor", format!("the storey below floor {floor} has no damper")))?,
-            }
-        }
-        other => unreachable!("{} is a combination of the modal displacements", other.kind()),
-    };
+    let targets = responses
+        .iter()
+        .map(|response| {
+            let target = match *response {
+                Response::Acceleration { floor } => {
+                    response.check(&problem.structure)?;
+                    Target::acceleration(&lanes, &shapes.iter().map(|s| s[floor - 1]).collect::<Vec<_>>())
+                }
+                Response::DamperForce { floor } => {
+                    response.check(&problem.structure)?;
+                    let damper = problem.structure.dampers.iter().position(|d| d.upper_floor + 1 == floor);
+                    Target::DamperForce {
+                        damper: damper.ok_or_else(|| {
+                            Error::invalid("floor", format!("the storey below floor {floor} has no damper"))
+                        })?,
+                    }
+                }
+                _ => {
+                    let weights = response.modal_weights(shapes, &problem.structure)?.expect("a combination");
+                    let mut offsets = [0.0; LANES];
+                    for (w, level) in weights.iter().zip(&scales.levels) {
+                        (0..LANES).for_each(|l| offsets[l] = w.mul_add(level[l], offsets[l]));
+                    }
+                    let gains = weights.iter().zip(&scales.outputs).map(|(w, s)| w * s).collect();
+                    Target::Combination { gains, offsets }
+                }
+            };
+            Ok(Tracked { target, linear: Vec::new(), speed: Vec::new(), best: [0.0; LANES] })
+        })
+        .collect::<Result<_>>()?;
     let zero = [[0.0; LANES]; MAX_MODES];
     Ok(Box::new(MotionPeaks {
         time_step: problem.storm.time_step,
         modes: lanes.inverse_masses.len(),
         lanes,
-        target,
+        targets,
         rest: zero,
         previous: zero,
         current: zero,
         current_input: zero,
         seen: 0,
-        steps: Steps::default(),
+        velocities: Vec::new(),
         forces: vec![0.0; problem.structure.dampers.len()],
-        best: [0.0; LANES],
     }))
 }
 
@@ -144,6 +159,9 @@ enum Target {
     },
     /// A damper's force: the peak is c·max|v|^α, so only its fastest velocity is tracked.
     DamperForce { damper: usize },
+    /// A combination Σ_m w_m y_m (displacement, drift, stroke): offsets Σ_m w_m level_m per lane
+    /// plus Σ_m gains_m ŷ_m with gains_m = w_m s_m.
+    Combination { gains: Vec<f64>, offsets: Lanes },
 }
 
 impl Target {
@@ -188,13 +206,14 @@ impl Target {
     }
 }
 
-/// One block's processed steps, every lane: the modal velocities `velocities[i·M + m]`, and for an
-/// acceleration L and Σ_m K_m|ẏ_m| per step.
-#[derive(Default)]
-struct Steps {
-    velocities: Vec<Lanes>,
+/// A response tracked through the storm, every lane: for an acceleration, L and Σ_m K_m|ŷ'_m| of
+/// the block's processed steps; the running peak (|a|, max |v| for a damper force, |u| for a
+/// combination).
+struct Tracked {
+    target: Target,
     linear: Vec<Lanes>,
     speed: Vec<Lanes>,
+    best: Lanes,
 }
 
 /// Modal values of every lane, for up to [`MAX_MODES`] modes.
@@ -204,7 +223,7 @@ struct MotionPeaks {
     time_step: f64,
     modes: usize,
     lanes: LaneModels,
-    target: Target,
+    targets: Vec<Tracked>,
     /// ŷ(0), and the last block's last two outputs and last inputs: a step is processed once its
     /// successor has arrived, for its central difference.
     rest: Modal,
@@ -212,11 +231,10 @@ struct MotionPeaks {
     current: Modal,
     current_input: Modal,
     seen: usize,
-    steps: Steps,
+    /// The block's processed steps' scaled modal velocities, `velocities[i·M + m]`, every lane.
+    velocities: Vec<Lanes>,
     /// Scratch: one lane's damper velocities, then f(v), at a step computed exactly.
     forces: Vec<f64>,
-    /// The running peak: |a| for an acceleration, max |v| for a damper force.
-    best: Lanes,
 }
 
 impl MotionSink for MotionPeaks {
@@ -226,7 +244,7 @@ impl MotionSink for MotionPeaks {
         let at = |k: usize| &outputs[k * modes..(k + 1) * modes];
         let input_at = |k: usize| &inputs[k * modes..(k + 1) * modes];
         let (previous, current, current_input) = (self.previous, self.current, self.current_input);
-        self.steps.velocities.clear();
+        self.velocities.clear();
         // Block step i is the successor of the step processed with it, s = (first + i) − 1.
         for i in 0..count {
             let seen = self.seen + i;
@@ -243,9 +261,9 @@ impl MotionSink for MotionPeaks {
                 _ => (at(i - 2), 0.5 / self.time_step),
             };
             for (after, before) in at(i).iter().zip(before) {
-                self.steps.velocities.push(std::array::from_fn(|l| (after[l] - before[l]) * scale));
+                self.velocities.push(std::array::from_fn(|l| (after[l] - before[l]) * scale));
             }
-            self.linear_part(here, input);
+            self.step(here, input);
         }
         if count > 0 {
             self.previous[..modes].copy_from_slice(if count > 1 { at(count - 2) } else { &current[..modes] });
@@ -256,137 +274,166 @@ impl MotionSink for MotionPeaks {
         self.reduce();
     }
 
-    fn finish(&mut self) -> Lanes {
+    fn finish(&mut self) -> Vec<Lanes> {
         let modes = self.modes;
-        self.steps.velocities.clear();
+        self.velocities.clear();
         if self.seen > 0 {
             let scale = if self.seen > 1 { 1.0 / self.time_step } else { 0.0 };
             let (current, previous, input) = (self.current, self.previous, self.current_input);
             for m in 0..modes {
-                self.steps.velocities.push(std::array::from_fn(|l| (current[m][l] - previous[m][l]) * scale));
+                self.velocities.push(std::array::from_fn(|l| (current[m][l] - previous[m][l]) * scale));
             }
-            self.linear_part(&current[..modes], &input[..modes]);
+            self.step(&current[..modes], &input[..modes]);
         }
         self.reduce();
-        match self.target {
-            Target::Acceleration { .. } => self.best,
-            Target::DamperForce { damper } => std::array::from_fn(|l| {
-                (self.lanes.coefficients[damper][l] * power(self.best[l], self.lanes.exponent)).abs()
-            }),
-        }
+        let (coefficients, alpha) = (&self.lanes.coefficients, self.lanes.exponent);
+        self.targets
+            .iter()
+            .map(|tracked| match tracked.target {
+                Target::DamperForce { damper } => {
+                    std::array::from_fn(|l| (coefficients[damper][l] * power(tracked.best[l], alpha)).abs())
+                }
+                _ => tracked.best,
+            })
+            .collect()
     }
 }
 
 impl MotionPeaks {
-    /// For an acceleration, L and Σ_m K_m|ŷ'_m| of the step whose velocities were pushed last,
-    /// from its outputs `y` and inputs `q`.
+    /// The step whose velocities were pushed last, from its outputs `y` and inputs `q`: the
+    /// combinations' and damper velocities' peaks, an acceleration's L and Σ_m K_m|ŷ'_m|.
     #[inline(always)]
-    fn linear_part(&mut self, y: &[Lanes], q: &[Lanes]) {
-        let Target::Acceleration { loads, velocities, displacements, k, .. } = &self.target else { return };
-        let steps = &mut self.steps;
-        let v = &steps.velocities[steps.velocities.len() - self.modes..];
-        let mut linear = [0.0; LANES];
-        let mut speed = [0.0; LANES];
-        for m in 0..self.modes {
-            let (y, q, v, rest) = (&y[m], &q[m], &v[m], &self.rest[m]);
-            let (load, velocity, displacement, k) = (&loads[m], &velocities[m], &displacements[m], &k[m]);
-            for l in 0..LANES {
-                linear[l] = load[l]
-                    .mul_add(q[l], velocity[l].mul_add(v[l], displacement[l].mul_add(y[l] - rest[l], linear[l])));
-                speed[l] = k[l].mul_add(v[l].abs(), speed[l]);
-            }
-        }
-        steps.linear.push(linear);
-        steps.speed.push(speed);
-    }
-
-    /// The block's processed steps into the running peaks.
-    fn reduce(&mut self) {
-        match &self.target {
-            Target::DamperForce { damper } => {
-                let g = &self.lanes.velocity_map[*damper];
-                for step in self.steps.velocities.chunks_exact(self.modes) {
-                    let mut v = [0.0; LANES];
-                    for (g, velocity) in g.iter().zip(step) {
-                        (0..LANES).for_each(|l| v[l] = g.mul_add(velocity[l], v[l]));
+    fn step(&mut self, y: &[Lanes], q: &[Lanes]) {
+        let v = &self.velocities[self.velocities.len() - self.modes..];
+        for tracked in &mut self.targets {
+            match &tracked.target {
+                Target::Combination { gains, offsets } => {
+                    let mut u = *offsets;
+                    for (g, y) in gains.iter().zip(y) {
+                        (0..LANES).for_each(|l| u[l] = g.mul_add(y[l], u[l]));
                     }
-                    (0..LANES).for_each(|l| self.best[l] = self.best[l].max(v[l].abs()));
+                    (0..LANES).for_each(|l| tracked.best[l] = tracked.best[l].max(u[l].abs()));
+                }
+                Target::DamperForce { damper } => {
+                    let mut u = [0.0; LANES];
+                    for (g, v) in self.lanes.velocity_map[*damper].iter().zip(v) {
+                        (0..LANES).for_each(|l| u[l] = g.mul_add(v[l], u[l]));
+                    }
+                    (0..LANES).for_each(|l| tracked.best[l] = tracked.best[l].max(u[l].abs()));
+                }
+                Target::Acceleration { loads, velocities, displacements, k, .. } => {
+                    let mut linear = [0.0; LANES];
+                    let mut speed = [0.0; LANES];
+                    for m in 0..self.modes {
+                        let (y, q, v, rest) = (&y[m], &q[m], &v[m], &self.rest[m]);
+                        let (load, velocity, displacement, k) = (&loads[m], &velocities[m], &displacements[m], &k[m]);
+                        for l in 0..LANES {
+                            linear[l] = load[l].mul_add(
+                                q[l],
+                                velocity[l].mul_add(v[l], displacement[l].mul_add(y[l] - rest[l], linear[l])),
+                            );
+                            speed[l] = k[l].mul_add(v[l].abs(), speed[l]);
+                        }
+                    }
+                    tracked.linear.push(linear);
+                    tracked.speed.push(speed);
                 }
             }
-            Target::Acceleration { .. } => self.reduce_accelerations(),
         }
-        self.steps.velocities.clear();
-        self.steps.linear.clear();
-        self.steps.speed.clear();
     }
 
-    /// Per lane, the block's chunks of [`CHUNK`] steps in decreasing order of their bound, and in
-    /// a chunk its steps likewise, computed exactly until the bound falls below the running peak:
-    /// the largest accelerations come first and rule out the rest.
-    fn reduce_accelerations(&mut self) {
-        let Target::Acceleration { h, bound, .. } = &self.target else { return };
-        let (lanes, steps, modes, forces) = (&self.lanes, &self.steps, self.modes, &mut self.forces);
-        let alpha = lanes.exponent;
-        let most = |l: usize, linear: f64, speed: f64| (1.0 + BOUND_MARGIN) * (linear + bound[l] * power(speed, alpha));
-        let count = steps.linear.len();
-        let mut chunks: Vec<(f64, usize)> = Vec::with_capacity(count.div_ceil(CHUNK));
-        let mut candidates: Vec<(f64, usize)> = Vec::with_capacity(CHUNK);
-        // Each chunk's largest |L| and Σ_m K_m|ŷ'_m|, every lane in one pass.
-        let largest: Vec<(Lanes, Lanes)> = (0..count)
-            .step_by(CHUNK)
-            .map(|first| {
-                let range = first..(first + CHUNK).min(count);
-                let (mut linear, mut speed) = ([0.0f64; LANES], [0.0f64; LANES]);
-                for (x, s) in steps.linear[range.clone()].iter().zip(&steps.speed[range]) {
-                    (0..LANES).for_each(|l| {
-                        linear[l] = linear[l].max(x[l].abs());
-                        speed[l] = speed[l].max(s[l]);
-                    });
-                }
-                (linear, speed)
-            })
-            .collect();
-        for (l, best) in self.best.iter_mut().enumerate() {
-            // A chunk with |L| ≤ best/2 and P S^α ≤ best/2 cannot beat the peak; most chunks are
-            // ruled out so, by comparisons with one power per lane and block.
-            let half = 0.5 * *best / (1.0 + BOUND_MARGIN);
-            let slow = if bound[l] > 0.0 { power(half / bound[l], 1.0 / alpha) } else { f64::INFINITY };
-            chunks.clear();
-            chunks.extend(
-                largest
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, (linear, speed))| linear[l] > half || speed[l] > slow)
-                    .map(|(c, (linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
-            );
-            chunks.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-            for &(chunk_bound, first) in &chunks {
-                if chunk_bound <= *best {
+    /// The block's accelerations into their running peaks.
+    fn reduce(&mut self) {
+        for Tracked { target, linear, speed, best } in &mut self.targets {
+            if let Target::Acceleration { h, bound, .. } = target {
+                let steps = Steps { velocities: &self.velocities, linear, speed };
+                reduce_accelerations(&self.lanes, &steps, self.modes, (h, bound), best, &mut self.forces);
+                linear.clear();
+                speed.clear();
+            }
+        }
+        self.velocities.clear();
+    }
+}
+
+/// Per lane, the block's chunks of [`CHUNK`] steps in decreasing order of their bound, and in a
+/// chunk its steps likewise, computed exactly until the bound falls below the running peak: the
+/// largest accelerations come first and rule out the rest.
+fn reduce_accelerations(
+    lanes: &LaneModels,
+    steps: &Steps,
+    modes: usize,
+    (h, bound): (&[Lanes], &Lanes),
+    peaks: &mut Lanes,
+    forces: &mut [f64],
+) {
+    let alpha = lanes.exponent;
+    let most = |l: usize, linear: f64, speed: f64| (1.0 + BOUND_MARGIN) * (linear + bound[l] * power(speed, alpha));
+    let Steps { velocities, linear, speed } = *steps;
+    let count = linear.len();
+    let mut chunks: Vec<(f64, usize)> = Vec::with_capacity(count.div_ceil(CHUNK));
+    let mut candidates: Vec<(f64, usize)> = Vec::with_capacity(CHUNK);
+    // Each chunk's largest |L| and Σ_m K_m|ŷ'_m|, every lane in one pass.
+    let largest: Vec<(Lanes, Lanes)> = (0..count)
+        .step_by(CHUNK)
+        .map(|first| {
+            let range = first..(first + CHUNK).min(count);
+            let (mut most_linear, mut most_speed) = ([0.0f64; LANES], [0.0f64; LANES]);
+            for (x, s) in linear[range.clone()].iter().zip(&speed[range]) {
+                (0..LANES).for_each(|l| {
+                    most_linear[l] = most_linear[l].max(x[l].abs());
+                    most_speed[l] = most_speed[l].max(s[l]);
+                });
+            }
+            (most_linear, most_speed)
+        })
+        .collect();
+    for (l, best) in peaks.iter_mut().enumerate() {
+        // A chunk with |L| ≤ best/2 and P S^α ≤ best/2 cannot beat the peak; most chunks are
+        // ruled out so, by comparisons with one power per lane and block.
+        let half = 0.5 * *best / (1.0 + BOUND_MARGIN);
+        let slow = if bound[l] > 0.0 { power(half / bound[l], 1.0 / alpha) } else { f64::INFINITY };
+        chunks.clear();
+        chunks.extend(
+            largest
+                .iter()
+                .enumerate()
+                .filter(|(_, (linear, speed))| linear[l] > half || speed[l] > slow)
+                .map(|(c, (linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
+        );
+        chunks.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+        for &(chunk_bound, first) in &chunks {
+            if chunk_bound <= *best {
+                break;
+            }
+            candidates.clear();
+            candidates
+                .extend((first..(first + CHUNK).min(count)).map(|i| (most(l, linear[i][l].abs(), speed[i][l]), i)));
+            candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
+            for &(step_bound, i) in &candidates {
+                if step_bound <= *best {
                     break;
                 }
-                candidates.clear();
-                candidates.extend(
-                    (first..(first + CHUNK).min(count))
-                        .map(|i| (most(l, steps.linear[i][l].abs(), steps.speed[i][l]), i)),
-                );
-                candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-                for &(step_bound, i) in &candidates {
-                    if step_bound <= *best {
-                        break;
-                    }
-                    let v = &steps.velocities[i * modes..(i + 1) * modes];
-                    for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
-                        *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
-                    }
-                    for force in forces.iter_mut() {
-                        *force = power(force.abs(), alpha).copysign(*force);
-                    }
-                    let dampers: f64 = forces.iter().zip(h).map(|(f, h)| h[l] * f).sum();
-                    *best = best.max((steps.linear[i][l] - dampers).abs());
+                let v = &velocities[i * modes..(i + 1) * modes];
+                for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
+                    *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
                 }
+                for force in forces.iter_mut() {
+                    *force = power(force.abs(), alpha).copysign(*force);
+                }
+                let dampers: f64 = forces.iter().zip(h).map(|(f, h)| h[l] * f).sum();
+                *best = best.max((linear[i][l] - dampers).abs());
             }
         }
     }
+}
+
+/// A block's processed steps as an acceleration's reduction reads them, every lane: the modal
+/// velocities `velocities[i·M + m]`, L and Σ_m K_m|ŷ'_m|.
+struct Steps<'a> {
+    velocities: &'a [Lanes],
+    linear: &'a [Lanes],
+    speed: &'a [Lanes],
 }
 
 #[cfg(test)]
@@ -404,7 +451,11 @@ mod tests {
         let mut problem = Problem::preset("frame40-kn").unwrap().with_storm(30.0, 0.01).unwrap();
         let steps = problem.storm.steps();
         let modes = problem.modes.count();
-        let scales = ModalScales { outputs: vec![0.02, 0.005, 0.001], inputs: vec![3e5, 1e5, 5e4] };
+        let scales = ModalScales {
+            outputs: vec![0.02, 0.005, 0.001],
+            inputs: vec![3e5, 1e5, 5e4],
+            levels: vec![[0.0; LANES]; 3],
+        };
         let x = problem.inputs.means();
         let inputs: Vec<&[f64]> = vec![&x[..]; LANES];
         // Lane l, mode m: a few incommensurate sines, different per lane.
@@ -424,7 +475,7 @@ mod tests {
             ] {
                 let shapes: Vec<Vec<f64>> =
                     (0..modes).map(|m| (0..floors).map(|f| problem.modes.shapes[(f, m)]).collect()).collect();
-                let mut sink = motion_sink(&problem, &shapes, response, &inputs, &scales).unwrap();
+                let mut sink = motion_sink(&problem, &shapes, &[response], &inputs, &scales).unwrap();
                 let mut first = 0;
                 for (k, len) in [1usize, 2, 511, 512, 37].into_iter().cycle().enumerate() {
                     let len = len.min(steps - first);
@@ -440,7 +491,7 @@ mod tests {
                         break;
                     }
                 }
-                let peaks = sink.finish();
+                let peaks = sink.finish()[0];
                 for (l, peak) in peaks.iter().enumerate() {
                     let p = problem.parameters(&x).unwrap();
                     let (sample_modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p).unwrap());

@@ -220,15 +220,16 @@ impl Metamodel {
     }
 
     /// Peaks over the storm for up to [`LANES`] samples run together, `samples[i]` = (its number
-    /// in the request, its inputs, its forces), reduced as `reduction` says; the number names a
-    /// diverging sample. `workspace` holds the batch's buffers; keep one per thread across calls.
+    /// in the request, its inputs, its forces), reduced as `reduction` says: per sample, one peak
+    /// per response. The number names a diverging sample. `workspace` holds the batch's buffers;
+    /// keep one per thread across calls.
     pub fn peaks(
         &self,
         problem: &Problem,
         samples: &[BatchInput],
         reduction: &Reduction,
         workspace: &mut Workspace,
-    ) -> Result<Vec<f64>> {
+    ) -> Result<Vec<Vec<f64>>> {
         self.run_peaks(problem, samples, reduction, workspace)?
             .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))
     }
@@ -243,7 +244,7 @@ impl Metamodel {
         samples: &[BatchInput],
         reduction: &Reduction,
         workspace: &mut Workspace,
-    ) -> Result<Vec<Option<f64>>> {
+    ) -> Result<Vec<Option<Vec<f64>>>> {
         let mut peaks = vec![None; samples.len()];
         let mut left: Vec<usize> = (0..samples.len()).collect();
         while !left.is_empty() {
@@ -270,7 +271,7 @@ impl Metamodel {
         samples: &[BatchInput],
         reduction: &Reduction,
         workspace: &mut Workspace,
-    ) -> Result<std::result::Result<Vec<f64>, BatchError>> {
+    ) -> Result<std::result::Result<Vec<Vec<f64>>, BatchError>> {
         let mut levels = Vec::with_capacity(samples.len());
         let mut batch = Vec::with_capacity(samples.len());
         for (lane, &(_, x, forces)) in samples.iter().enumerate() {
@@ -294,19 +295,25 @@ impl Metamodel {
                 let mut peaks = [0.0f64; LANES];
                 let mut sink = Sink::Peaks { gains: &gains, offsets, peaks: &mut peaks };
                 let run = batch::run(&programs, &batch, steps, time_step, workspace, &mut sink);
-                Ok(run.map(|()| peaks[..samples.len()].to_vec()))
+                Ok(run.map(|()| peaks[..samples.len()].iter().map(|&peak| vec![peak]).collect()))
             }
             Reduction::Motion(sink_for) => {
                 let inputs: Vec<&[f64]> = samples.iter().map(|s| s.1).collect();
+                let mut level = vec![[0.0; LANES]; self.models.len()];
+                for (lane, sample_levels) in levels.iter().enumerate() {
+                    sample_levels.iter().zip(&mut level).for_each(|(value, to)| to[lane] = *value);
+                }
                 let scales = ModalScales {
                     outputs: self.models.iter().map(|m| m.output_scale).collect(),
                     inputs: self.models.iter().map(|m| m.input_scale).collect(),
+                    levels: level,
                 };
                 let mut motion = sink_for(&inputs, &scales)?;
                 let mut consume =
                     |first: usize, outputs: &[Lanes], inputs: &[Lanes]| motion.take(first, outputs, inputs);
                 let run = batch::run(&programs, &batch, steps, time_step, workspace, &mut Sink::Blocks(&mut consume));
-                Ok(run.map(|()| motion.finish()[..samples.len()].to_vec()))
+                let peaks = run.map(|()| motion.finish());
+                Ok(peaks.map(|peaks| (0..samples.len()).map(|lane| peaks.iter().map(|p| p[lane]).collect()).collect()))
             }
         }
     }
@@ -320,19 +327,18 @@ pub enum Reduction<'a> {
     /// Peak |Σ_m w_m y_m(t)| of a fixed combination of the modal displacements (displacement,
     /// drift, stroke), formed inside the free run's vectorised code.
     Combination(&'a [f64]),
-    /// A response of the motion about its start and of the loads (velocities, accelerations,
-    /// damper forces), by a sink built for the batch: lane i's physical inputs at i, and the
-    /// scales of its blocks.
+    /// Responses of the motion and the loads (any, accelerations and damper forces included), by
+    /// a sink built for the batch: lane i's physical inputs at i, and the scales of its blocks.
     Motion(&'a (dyn Fn(&[&[f64]], &ModalScales) -> Result<Box<dyn MotionSink>> + Sync)),
 }
 
-/// The scales of the free run's blocks, per mode: the output ŷ_m is (y_m − static level)/outputs[m]
-/// and the input q̂_m is (Q_m − Q̄_m)/inputs[m]. A response of the motion about its start needs no
-/// level: y_m(t) − y_m(0) = outputs[m]·(ŷ_m(t) − ŷ_m(0)).
+/// The scales of the free run's blocks, per mode: the output ŷ_m is (y_m − levels[m])/outputs[m]
+/// and the input q̂_m is (Q_m − Q̄_m)/inputs[m], `levels[m]` the static level of every lane.
 #[derive(Debug, Clone)]
 pub struct ModalScales {
     pub outputs: Vec<f64>,
     pub inputs: Vec<f64>,
+    pub levels: Vec<Lanes>,
 }
 
 /// What a batch's modal motion is reduced to, block by block: one peak per lane.
@@ -340,8 +346,8 @@ pub trait MotionSink {
     /// Steps `first..` of a block, every lane: `outputs[i·M + m]` the scaled output ŷ_m at step
     /// first + i and `inputs[i·M + m]` the scaled input q̂_m it read (see [`ModalScales`]).
     fn take(&mut self, first: usize, outputs: &[Lanes], inputs: &[Lanes]);
-    /// Per lane the peak, once the storm is over.
-    fn finish(&mut self) -> Lanes;
+    /// Per response, every lane's peak, once the storm is over.
+    fn finish(&mut self) -> Vec<Lanes>;
 }
 
 /// The error of a failed batch, naming the sample where it has a number.
