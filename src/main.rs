@@ -38,6 +38,8 @@ enum Command {
     Validate(cli::ValidateArgs),
     /// Exceedance curve of a peak response, sampled from a metamodel.
     Exceedance(cli::ExceedanceArgs),
+    /// Profile of a quantile of a response's peaks at every floor, with its band.
+    Profile(cli::ProfileArgs),
     /// Annual exceedance curve, return levels and reliability index under a wind climate.
     Hazard(cli::HazardArgs),
     /// Fragility curves P(peak > x | v) over storm speeds, with lognormal fits.
@@ -59,6 +61,7 @@ fn main() -> ExitCode {
         Command::Calibrate(args) => cli::calibrate(args),
         Command::Validate(args) => cli::validate(args),
         Command::Exceedance(args) => cli::exceedance(args),
+        Command::Profile(args) => cli::profile(args),
         Command::Hazard(args) => cli::hazard(args),
         Command::Fragility(args) => cli::fragility(args),
         Command::Sensitivity(args) => cli::sensitivity(args),

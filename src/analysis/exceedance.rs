@@ -162,23 +162,37 @@ pub enum OnDivergence {
 }
 
 /// Peaks of `response` for every row of `draws`, in parallel by batches of [`LANES`], reporting
-/// progress and stopping when `observer` asks. Displacements, drifts and strokes are combinations
-/// formed inside the free run; accelerations and damper forces come from the batch's motion
-/// ([`motion_sink`]).
+/// progress and stopping when `observer` asks.
 pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observer: &dyn Observer) -> Result<Vec<f64>> {
+    Ok(peak_sets_at(metamodel, draws, &[response], observer)?.into_iter().map(|peaks| peaks[0]).collect())
+}
+
+/// Peaks of each of `responses` for every row of `draws` (`[row][response]`), in parallel by
+/// batches of [`LANES`], reporting progress and stopping when `observer` asks. One displacement,
+/// drift or stroke is a combination formed inside the free run; anything else comes from the
+/// batch's blocks ([`motion_sink`]), every response from the same runs.
+pub fn peak_sets_at(
+    metamodel: &Metamodel,
+    draws: &Draws,
+    responses: &[Response],
+    observer: &dyn Observer,
+) -> Result<Vec<Vec<f64>>> {
     let Draws { problem, rows, storms, seed, on_divergence } = *draws;
     assert_eq!(rows.len(), storms.len(), "one storm per row");
     let path = metamodel.calibration.options.wind;
-    let weights = response.modal_weights(&metamodel.modes.shapes, &problem.structure)?;
+    let weights = match responses {
+        [response] => response.modal_weights(&metamodel.modes.shapes, &problem.structure)?,
+        _ => None,
+    };
     let sink_for = |inputs: &[&[f64]], scales: &ModalScales| {
-        motion_sink(problem, &metamodel.modes.shapes, &[response], inputs, scales)
+        motion_sink(problem, &metamodel.modes.shapes, responses, inputs, scales)
     };
     let reduction = match &weights {
         Some(weights) => Reduction::Combination(weights),
         None => Reduction::Motion(&sink_for),
     };
     let (done, total) = (AtomicUsize::new(0), rows.len());
-    let peaks: Vec<Vec<f64>> = rows
+    let peaks: Vec<Vec<Vec<f64>>> = rows
         .par_chunks(LANES)
         .zip(storms.par_chunks(LANES))
         .enumerate()
@@ -200,15 +214,11 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
                     .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
                     .collect();
                 let peaks = match on_divergence {
-                    OnDivergence::Fail => metamodel
-                        .peaks(problem, &batch, &reduction, batch_workspace)?
-                        .into_iter()
-                        .map(|p| p[0])
-                        .collect(),
+                    OnDivergence::Fail => metamodel.peaks(problem, &batch, &reduction, batch_workspace)?,
                     OnDivergence::Exceed => metamodel
                         .peaks_or_divergence(problem, &batch, &reduction, batch_workspace)?
                         .into_iter()
-                        .map(|peak| peak.map_or(f64::INFINITY, |p| p[0]))
+                        .map(|peaks| peaks.unwrap_or_else(|| vec![f64::INFINITY; responses.len()]))
                         .collect(),
                 };
                 let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();

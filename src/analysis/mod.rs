@@ -10,6 +10,7 @@ mod hazard;
 mod motion_peaks;
 mod peaks;
 mod plot;
+mod profile;
 mod response;
 mod sobol;
 mod strata;
@@ -29,7 +30,8 @@ pub use hazard::{
     hazard_curve, metamodel_hazard,
 };
 pub use peaks::{PeakSummary, pearson, quantile};
-pub use plot::{exceedance_svg, fragility_svg, hazard_svg, validation_svg};
+pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validation_svg};
+pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
 pub use response::{RESPONSE_KINDS, Response, ResponseView, STANDARD_GRAVITY};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;

@@ -1,7 +1,7 @@
 //! SVG figures: exceedance curves with their bands (the paper's Fig. 7), the scatter of peaks,
 //! reference against metamodel (Fig. 6), annual curves with return levels, and fragility curves.
 
-use super::{ExceedanceCurve, Fragility, HazardCurve};
+use super::{ExceedanceCurve, Fragility, HazardCurve, PeakProfile};
 use plotters::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -72,6 +72,43 @@ fn render(size: (u32, u32), draw: impl FnOnce(&Area<'_>)) -> String {
         let _ = root.present();
     }
     svg
+}
+
+/// A peak profile up the height: the quantile at each floor with its band, and the mean peak.
+pub fn profile_svg(profile: &PeakProfile, x_label: &str) -> String {
+    render((560, 640), |root| {
+        let range = axis_range(profile.lower.iter().chain(&profile.upper).chain(&profile.means).copied(), 0.04);
+        let top = profile.floors.iter().copied().max().unwrap_or(1) as f64;
+        let Ok(mut chart) = ChartBuilder::on(root)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(48)
+            .build_cartesian_2d(range.start.max(0.0)..range.end, 0.0..top + 1.0)
+        else {
+            return;
+        };
+        let _ = chart.configure_mesh().x_desc(x_label).y_desc("floor").draw();
+        let at = |values: &[f64]| -> Vec<(f64, f64)> {
+            values.iter().zip(&profile.floors).map(|(x, floor)| (*x, *floor as f64)).collect()
+        };
+        let band: Vec<(f64, f64)> =
+            at(&profile.lower).into_iter().chain(at(&profile.upper).into_iter().rev()).collect();
+        let colour = COLOURS[0];
+        let _ = chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.15).filled())));
+        let percent = 100.0 * profile.quantile;
+        let lines = [
+            (format!("{percent} % peak"), colour, at(&profile.values)),
+            ("mean peak".to_string(), COLOURS[1], at(&profile.means)),
+        ];
+        for (label, colour, line) in lines {
+            if let Ok(series) = chart.draw_series(LineSeries::new(line, colour.stroke_width(2))) {
+                series
+                    .label(label)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2)));
+            }
+        }
+        let _ = chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw();
+    })
 }
 
 /// Exceedance curves with their confidence bands.

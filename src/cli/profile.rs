@@ -1,0 +1,103 @@
+//! `windmeta profile`: the profile of a quantile of a response's peaks up the height, sampled from
+//! a metamodel.
+
+use super::args::{AnalysisArgs, answer, out_format};
+use super::read_metamodel;
+use super::validate::Counter;
+use crate::analysis::{PeakProfile, check_confidence, check_quantile, metamodel_profiles, profile_svg};
+use crate::error::Result;
+use crate::uncertainty::parse_assignment;
+use clap::Args;
+use std::path::PathBuf;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Args)]
+pub struct ProfileArgs {
+    #[arg(long)]
+    pub model: PathBuf,
+    #[arg(long, default_value_t = 10_000)]
+    pub samples: usize,
+    /// The response at every floor: displacement, drift, acceleration, damper_force or
+    /// damper_stroke (the floors above a damper).
+    #[arg(long, default_value = "drift")]
+    pub response: String,
+    /// Probability of the quantile profiled, e.g. 0.9 for the peak one storm in ten exceeds.
+    #[arg(long, default_value_t = 0.9, allow_negative_numbers = true)]
+    pub quantile: f64,
+    /// Hold the mean wind speed (m/s).
+    #[arg(long, allow_negative_numbers = true)]
+    pub wind_speed: Option<f64>,
+    /// Hold any input, e.g. --fix damping_ratio=0.02 (repeatable).
+    #[arg(long = "fix", value_name = "NAME=VALUE")]
+    pub fix: Vec<String>,
+    #[command(flatten)]
+    pub analysis: AnalysisArgs,
+    /// Write the profile: .csv, .json or .svg by extension.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+fn csv_text(profile: &PeakProfile) -> String {
+    let unit = unit_tag(&profile.unit);
+    let mut out = format!("floor,quantile_{unit},lower_{unit},upper_{unit},mean_{unit}\n");
+    for i in 0..profile.floors.len() {
+        out += &format!(
+            "{},{},{},{},{}\n",
+            profile.floors[i], profile.values[i], profile.lower[i], profile.upper[i], profile.means[i]
+        );
+    }
+    out
+}
+
+/// A unit as a column-name suffix: m, m_s2, n.
+pub fn unit_tag(unit: &str) -> String {
+    unit.replace("/s²", "_s2").to_lowercase()
+}
+
+pub fn profile(args: &ProfileArgs) -> Result<String> {
+    check_quantile(args.quantile)?;
+    check_confidence(args.analysis.confidence)?;
+    let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
+    let (metamodel, problem) = read_metamodel(&args.model)?;
+    let mut inputs = problem.inputs.clone();
+    if let Some(v) = args.wind_speed {
+        inputs = inputs.with_fixed("wind_speed", v)?;
+    }
+    for assignment in &args.fix {
+        let (name, value) = parse_assignment(assignment)?;
+        inputs = inputs.with_fixed(&name, value)?;
+    }
+    let kind = args.response.replace('-', "_");
+    let started = Instant::now();
+    let seed = args.analysis.seed;
+    let samples = metamodel_profiles(&metamodel, &problem, &inputs, args.samples, seed, &kind, &Counter(started))?;
+    let seconds = started.elapsed().as_secs_f64();
+    let profile = samples.quantile_profile(args.quantile, args.analysis.confidence)?;
+    let label = format!("peak {} ({})", kind.replace('_', " "), profile.unit);
+    let out = args.out.as_deref().zip(format);
+    answer(
+        &profile,
+        args.analysis.json,
+        out,
+        |format| if format == "csv" { csv_text(&profile) } else { profile_svg(&profile, &label) },
+        || {
+            let percent = 100.0 * profile.quantile;
+            let mut table = format!("{label} up the height: {} samples in {seconds:.2} s\n", profile.samples);
+            table += &format!(
+                "{:>6}  {:>12}  {:>12}  {:>12}  {:>12}\n",
+                "floor",
+                format!("{percent} %"),
+                format!("lower {}", 100.0 * profile.confidence),
+                "upper",
+                "mean"
+            );
+            for i in (0..profile.floors.len()).rev() {
+                table += &format!(
+                    "{:>6}  {:>12.5}  {:>12.5}  {:>12.5}  {:>12.5}\n",
+                    profile.floors[i], profile.values[i], profile.lower[i], profile.upper[i], profile.means[i]
+                );
+            }
+            table
+        },
+    )
+}
