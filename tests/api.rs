@@ -87,6 +87,38 @@ async fn calibrate_follow_fetch_and_sample() {
     let (s, ct, body) =
         problem(app.post(&path, json!({"samples": 8, "response": "damper_force", "floor": 99})).await).await;
     assert_problem(s, &ct, &body, 422, "floor");
+    // The profile of the 90 % peak drift up the height, from the same storms as the curve: the
+    // curve is the one without a profile, and each floor's band holds its quantile.
+    let plain = json!({"samples": 60, "seed": 3, "response": "drift", "floor": 20});
+    let (status, without) = app.post_json(&path, plain.clone()).await;
+    assert_eq!(status, 200, "{without}");
+    let mut profiled = plain.clone();
+    profiled["profile_quantile"] = json!(0.9);
+    let (status, with) = app.post_json(&path, profiled).await;
+    assert_eq!(status, 200, "{with}");
+    assert_eq!(with["probabilities"], without["probabilities"]);
+    let profile = &with["profile"];
+    let floors = profile["floors"].as_array().unwrap().len();
+    assert_eq!((profile["response"].as_str(), profile["samples"].as_u64()), (Some("drift"), Some(60)), "{profile}");
+    assert!(floors >= 20 && without.get("profile").is_none(), "{with}");
+    for i in 0..floors {
+        let at = |key: &str| profile[key][i].as_f64().unwrap();
+        assert!(at("lower") <= at("values") && at("values") <= at("upper") && at("values") > 0.0, "{profile}");
+    }
+    let (s, ct, body) = problem(app.post(&path, json!({"samples": 8, "profile_quantile": 1.5})).await).await;
+    assert_problem(s, &ct, &body, 422, "profile_quantile");
+    let (s, ct, body) = problem(app.post(&path, json!({"samples": 8, "profile_quantile": 0.99})).await).await;
+    assert_problem(s, &ct, &body, 422, "samples");
+    // A CSV names the threshold's unit.
+    let csv = app
+        .client
+        .post(format!("{}{path}", app.address))
+        .header("accept", "text/csv")
+        .json(&json!({"samples": 8, "response": "acceleration"}))
+        .send()
+        .await
+        .unwrap();
+    assert!(csv.text().await.unwrap().starts_with("threshold_m_s2,probability,lower,upper"));
     // The same request as an operation (what larger requests become).
     let queued = app
         .client

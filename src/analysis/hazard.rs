@@ -138,10 +138,11 @@ pub struct HazardCurve {
 }
 
 impl HazardCurve {
-    /// The curve as CSV, one row per threshold (empty where a value is undefined).
-    pub fn csv(&self) -> String {
+    /// The curve as CSV, one row per threshold (empty where a value is undefined); the threshold
+    /// column named with the response's unit (`threshold_m`, `threshold_m_s2`, `threshold_n`).
+    pub fn csv(&self, unit_tag: &str) -> String {
         let mut out =
-            String::from("threshold_m,annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range\n");
+            format!("threshold_{unit_tag},annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range\n");
         let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
         for i in 0..self.thresholds.len() {
             out += &format!(

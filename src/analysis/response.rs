@@ -79,6 +79,15 @@ impl Response {
         }
     }
 
+    /// The unit as a suffix of a column name: `m`, `m_s2` or `n`.
+    pub fn unit_tag(&self) -> &'static str {
+        match self {
+            Response::Acceleration { .. } => "m_s2",
+            Response::DamperForce { .. } => "n",
+            _ => "m",
+        }
+    }
+
     /// A human name, for tables and axes.
     pub fn describe(&self) -> String {
         match *self {

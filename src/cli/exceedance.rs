@@ -4,7 +4,8 @@ use super::args::{ResponseArgs, out_format, write_out};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    ExceedanceCurve, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg, metamodel_peaks,
+    ExceedanceCurve, Response, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg,
+    metamodel_peaks,
 };
 use crate::error::{Error, Result};
 use crate::uncertainty::parse_assignment;
@@ -29,7 +30,7 @@ pub struct ExceedanceArgs {
     /// Hold any input, e.g. --fix damping_ratio=0.02 (repeatable).
     #[arg(long = "fix", value_name = "NAME=VALUE")]
     pub fix: Vec<String>,
-    /// Thresholds (m), comma separated; automatic when absent.
+    /// Thresholds in the response's unit (m, m/s² or N), comma separated; automatic when absent.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub thresholds: Option<Vec<f64>>,
     /// Confidence level of the band.
@@ -40,8 +41,8 @@ pub struct ExceedanceArgs {
     pub out: Option<PathBuf>,
 }
 
-fn csv_text(curve: &ExceedanceCurve) -> String {
-    let mut out = String::from("threshold_m,probability,lower,upper\n");
+fn csv_text(curve: &ExceedanceCurve, response: &Response) -> String {
+    let mut out = format!("threshold_{},probability,lower,upper\n", response.unit_tag());
     for i in 0..curve.thresholds.len() {
         out += &format!("{},{},{},{}\n", curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]);
     }
@@ -74,7 +75,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     let what = response.describe();
     if let (Some(path), Some(format)) = (&args.out, format) {
         let text = match format.as_str() {
-            "csv" => csv_text(&curve),
+            "csv" => csv_text(&curve, &response),
             "json" => serde_json::to_string_pretty(&json!({"response": response, "curve": curve, "seconds": seconds}))
                 .expect("plain JSON"),
             _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x ({})", response.unit())),

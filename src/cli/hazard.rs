@@ -78,7 +78,11 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
     let what = response.describe();
     let out = args.out.as_deref().zip(format);
     let render = |format: &str| {
-        if format == "csv" { curve.csv() } else { hazard_svg(&curve, &format!("peak {what} x ({})", response.unit())) }
+        if format == "csv" {
+            curve.csv(response.unit_tag())
+        } else {
+            hazard_svg(&curve, &format!("peak {what} x ({})", response.unit()))
+        }
     };
     answer(&curve, args.analysis.json, out, render, || table(&curve, &what, response.unit(), seconds))
 }

@@ -37,8 +37,7 @@ pub struct ProfileArgs {
     pub out: Option<PathBuf>,
 }
 
-fn csv_text(profile: &PeakProfile) -> String {
-    let unit = unit_tag(&profile.unit);
+fn csv_text(profile: &PeakProfile, unit: &str) -> String {
     let mut out = format!("floor,quantile_{unit},lower_{unit},upper_{unit},mean_{unit}\n");
     for i in 0..profile.floors.len() {
         out += &format!(
@@ -47,11 +46,6 @@ fn csv_text(profile: &PeakProfile) -> String {
         );
     }
     out
-}
-
-/// A unit as a column-name suffix: m, m_s2, n.
-pub fn unit_tag(unit: &str) -> String {
-    unit.replace("/s²", "_s2").to_lowercase()
 }
 
 pub fn profile(args: &ProfileArgs) -> Result<String> {
@@ -79,7 +73,13 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
         &profile,
         args.analysis.json,
         out,
-        |format| if format == "csv" { csv_text(&profile) } else { profile_svg(&profile, &label) },
+        |format| {
+            if format == "csv" {
+                csv_text(&profile, samples.responses[0].unit_tag())
+            } else {
+                profile_svg(&profile, &label)
+            }
+        },
         || {
             let percent = 100.0 * profile.quantile;
             let mut table = format!("{label} up the height: {} samples in {seconds:.2} s\n", profile.samples);

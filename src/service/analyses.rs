@@ -297,7 +297,7 @@ impl AnalysisAnswer {
     /// fragility curves; JSON where the asked format does not apply.
     pub fn render(&self, rendering: Rendering) -> (&'static str, String) {
         match (self, rendering) {
-            (AnalysisAnswer::Hazard(a), Rendering::Csv) => ("text/csv", a.curve.csv()),
+            (AnalysisAnswer::Hazard(a), Rendering::Csv) => ("text/csv", a.curve.csv(a.response.unit_tag())),
             (AnalysisAnswer::Hazard(a), Rendering::Svg) => (
                 "image/svg+xml",
                 hazard_svg(&a.curve, &format!("peak {} x ({})", a.response.describe(), a.response.unit())),

@@ -6,7 +6,8 @@ use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
 use crate::analysis::exceedance_svg;
 use crate::analysis::{
-    Response, automatic_thresholds, check_confidence, check_thresholds, exceedance_curve, metamodel_peaks,
+    PeakProfile, Response, automatic_thresholds, check_confidence, check_quantile, check_thresholds, exceedance_curve,
+    metamodel_peaks, metamodel_profiles,
 };
 use crate::error::{Error, Result, require_finite};
 use crate::problem::Problem;
@@ -73,9 +74,14 @@ pub struct ExceedanceRequest {
     /// Inputs held fixed, by name (e.g. `{"wind_speed": 40}`), each inside its marginal's support.
     #[schema(schema_with = fixed_inputs_schema)]
     pub fixed: BTreeMap<String, f64>,
-    /// Level of the Clopper-Pearson band, in (0, 1).
+    /// Level of the Clopper-Pearson band (and of the profile's band), in (0, 1).
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
     pub confidence: f64,
+    /// When given, in (0, 1), the answer also holds `profile`: this quantile of the response's
+    /// peaks at every floor where the response exists (e.g. 0.9: the 90 % peak drift of each
+    /// storey), with a distribution-free band at `confidence`, from the same storms as the curve.
+    #[schema(exclusive_minimum = 0, exclusive_maximum = 1)]
+    pub profile_quantile: Option<f64>,
 }
 
 impl Default for ExceedanceRequest {
@@ -88,6 +94,7 @@ impl Default for ExceedanceRequest {
             thresholds: None,
             fixed: BTreeMap::new(),
             confidence: 0.95,
+            profile_quantile: None,
         }
     }
 }
@@ -99,6 +106,11 @@ impl ExceedanceRequest {
             return Err(Error::invalid("samples", format!("must be between 1 and {}", config.max_samples)));
         }
         check_confidence(self.confidence)?;
+        if let Some(p) = self.profile_quantile {
+            check_quantile(p).map_err(|_| {
+                Error::invalid("profile_quantile", format!("must lie strictly between 0 and 1, got {p}"))
+            })?;
+        }
         if let Some(thresholds) = &self.thresholds {
             check_thresholds(thresholds)?;
         }
@@ -122,11 +134,22 @@ impl ExceedanceRequest {
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
         let response = response_of(self.floor, self.response, problem);
+        response.check(&problem.structure)?;
         let inputs = held_inputs(problem, &self.fixed)?;
-        let peaks = metamodel_peaks(metamodel, problem, &inputs, self.samples, self.seed, response, observer)?;
+        let (peaks, profile) = match self.profile_quantile {
+            None => (metamodel_peaks(metamodel, problem, &inputs, self.samples, self.seed, response, observer)?, None),
+            Some(p) => {
+                let (samples, seed) = (self.samples, self.seed);
+                let all = metamodel_profiles(metamodel, problem, &inputs, samples, seed, response.kind(), observer)?;
+                let column =
+                    all.responses.iter().position(|r| *r == response).expect("the response's floor is profiled");
+                let profile = all.quantile_profile(p, self.confidence)?;
+                (all.peaks.iter().map(|peaks| peaks[column]).collect(), Some(profile))
+            }
+        };
         let thresholds = self.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
         let curve = exceedance_curve(&peaks, &thresholds, self.confidence);
-        Ok(ExceedanceAnswer { curve, response, metamodel_id: metamodel_id.to_string() })
+        Ok(ExceedanceAnswer { curve, response, profile, metamodel_id: metamodel_id.to_string() })
     }
 }
 
@@ -149,6 +172,9 @@ pub struct ExceedanceAnswer {
     #[serde(flatten)]
     pub curve: ExceedanceCurve,
     pub response: Response,
+    /// The quantile profile, when the request asked for one.
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub profile: Option<PeakProfile>,
     pub metamodel_id: String,
 }
 
@@ -177,7 +203,7 @@ impl Rendering {
         match self {
             Rendering::Json => ("application/json", serde_json::to_string(answer).expect("a curve serialises")),
             Rendering::Csv => {
-                let mut text = String::from("threshold_m,probability,lower,upper\n");
+                let mut text = format!("threshold_{},probability,lower,upper\n", answer.response.unit_tag());
                 for i in 0..curve.thresholds.len() {
                     let row = [curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]];
                     text += &format!("{},{},{},{}\n", row[0], row[1], row[2], row[3]);
