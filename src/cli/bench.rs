@@ -1,11 +1,12 @@
 //! `windmeta bench`: the method's costs side by side, measured in one run so that their ratios are
 //! honest: a full calibration and its stages, the per-sample stages of one full-size storm (wind by
 //! both paths, both reference integrators, the metamodel's free run on the same storm), and an
-//! exceedance curve, an annual curve with ten return levels and Sobol indices end to end. Speed is measured here and in `benches/`, never asserted in a test.
+//! exceedance curve, a roof-acceleration curve, a drift profile of every floor, an annual curve with
+//! ten return levels and Sobol indices end to end. Speed is measured here and in `benches/`, never asserted in a test.
 
 use crate::analysis::{
     HazardOptions, Response, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve, metamodel_hazard,
-    metamodel_peaks, metamodel_sensitivity,
+    metamodel_peaks, metamodel_profiles, metamodel_sensitivity,
 };
 use crate::cancel::Never;
 use crate::dynamics::{integrate_full, integrate_reduced};
@@ -120,6 +121,24 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     rows.push(row(
         format!("exceedance curve, {} samples, end to end (all threads)", args.samples),
         exceedance,
+        repetitions.min(3),
+    ));
+    let roof_acceleration = Response::Acceleration { floor: problem.structure.floors() };
+    let acceleration = time(repetitions.min(3), |r| {
+        metamodel_peaks(&metamodel, &problem, &problem.inputs, args.samples, 1 + r, roof_acceleration, &Silent)
+    })?;
+    rows.push(row(
+        format!("roof acceleration exceedance peaks, {} samples (all threads)", args.samples),
+        acceleration,
+        repetitions.min(3),
+    ));
+    let profile = time(repetitions.min(3), |r| {
+        let samples = metamodel_profiles(&metamodel, &problem, &problem.inputs, args.samples, 1 + r, "drift", &Silent)?;
+        samples.quantile_profile(0.9, 0.95)
+    })?;
+    rows.push(row(
+        format!("drift profile, every floor, 90 % quantile, {} samples (all threads)", args.samples),
+        profile,
         repetitions.min(3),
     ));
     let hazard = HazardOptions {
