@@ -249,3 +249,28 @@ fn storm_accelerations_agree_with_the_displacement_history() {
         assert!(force.is_finite() && force > 0.0, "damper {d}: {force}");
     }
 }
+
+/// The reference's peaks by response: a reduced-order run's roof displacement is its own peak and
+/// a stroke is cos θ times its storey's drift; a full-order run gives its floors' displacements
+/// and drifts from its histories, and refuses an acceleration naming the response.
+#[test]
+fn reference_runs_report_their_responses() {
+    use windmeta::analysis::{Response, reference_peak};
+    use windmeta::problem::{Order, WindPath};
+    let problem = Problem::preset("frame40-kn").unwrap().with_storm(20.0, 0.01).unwrap();
+    let x = problem.inputs.means();
+    let roof = Response::Displacement { floor: problem.structure.floors() };
+    for order in [Order::Reduced, Order::Full] {
+        let run = problem.reference_run(&x, order, WindPath::Field, &mut rng_from_seed(5)).unwrap();
+        assert_eq!(reference_peak(&problem, &x, &run, roof).unwrap(), run.peak());
+        let drift = reference_peak(&problem, &x, &run, Response::Drift { floor: 12 }).unwrap();
+        let stroke = reference_peak(&problem, &x, &run, Response::DamperStroke { floor: 12 }).unwrap();
+        let cos = problem.structure.dampers[11].cos_angle;
+        assert!(drift > 0.0 && (stroke - cos * drift).abs() <= 1e-12 * stroke, "{order:?}: {stroke} vs {cos}·{drift}");
+        let force = reference_peak(&problem, &x, &run, Response::DamperForce { floor: 12 }).unwrap();
+        assert!(force > 0.0, "{order:?}");
+    }
+    let full = problem.reference_run(&x, Order::Full, WindPath::Field, &mut rng_from_seed(5)).unwrap();
+    let error = reference_peak(&problem, &x, &full, Response::Acceleration { floor: 3 }).unwrap_err();
+    assert!(error.to_string().starts_with("response"), "{error}");
+}

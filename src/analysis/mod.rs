@@ -11,6 +11,7 @@ mod motion_peaks;
 mod peaks;
 mod plot;
 mod profile;
+mod reference;
 mod response;
 mod sobol;
 mod strata;
@@ -32,6 +33,7 @@ pub use hazard::{
 pub use peaks::{PeakSummary, pearson, quantile};
 pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validation_svg};
 pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
+pub use reference::reference_peak;
 pub use response::{RESPONSE_KINDS, Response, ResponseView, STANDARD_GRAVITY};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;

@@ -1,8 +1,9 @@
-//! `windmeta sample-peaks`: peak roof displacements of many storms through the reference model.
+//! `windmeta sample-peaks`: peaks of a response over many storms through the reference model.
 
 use super::ProblemArgs;
+use super::args::ResponseArgs;
 use super::simulate::WindChoice;
-use crate::analysis::PeakSummary;
+use crate::analysis::{PeakSummary, reference_peak};
 use crate::error::{Error, Result};
 use crate::problem::{Order, WindPath};
 use crate::uncertainty::{monte_carlo, rng_from_seed, stream_seed};
@@ -32,6 +33,8 @@ pub struct SamplePeaksArgs {
     pub full_order: bool,
     #[arg(long, value_enum, default_value = "modal")]
     pub wind: WindChoice,
+    #[command(flatten)]
+    pub response: ResponseArgs,
     #[arg(long)]
     pub json: bool,
 }
@@ -47,6 +50,7 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
     if args.nominal {
         problem.inputs = problem.inputs.nominal();
     }
+    let response = args.response.response(&problem)?;
     let started = Instant::now();
     let inputs = monte_carlo(&problem.inputs, args.samples, &mut rng_from_seed(args.seed));
     let order = if args.full_order { Order::Full } else { Order::Reduced };
@@ -63,7 +67,7 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
             if finished.is_multiple_of(step) || finished == args.samples {
                 eprintln!("{finished}/{} storms, {:.1} s", args.samples, started.elapsed().as_secs_f64());
             }
-            Ok(run.peak())
+            reference_peak(&problem, x, &run, response)
         })
         .collect::<Result<Vec<f64>>>()?;
     let summary = PeakSummary::of(&peaks);
@@ -78,6 +82,8 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
             "nominal": args.nominal,
             "order": if args.full_order { "full" } else { "reduced" },
             "duration_s": problem.storm.duration,
+            "response": response,
+            "unit": response.unit(),
             "peaks": peaks,
             "mean": summary.mean,
             "sd": summary.sd,
@@ -87,16 +93,18 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
         return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
     }
     let mut out = format!(
-        "{}: peak roof displacement of {} storms of {} s ({} inputs, seed {})\n",
+        "{}: peak {} of {} storms of {} s ({} inputs, seed {})\n",
         problem.name,
+        response.describe(),
         args.samples,
         problem.storm.duration,
         if args.nominal { "nominal" } else { "random" },
         args.seed
     );
-    out += &format!("mean {:.4} m, sd {:.4} m\n", summary.mean, summary.sd);
+    let unit = response.unit();
+    out += &format!("mean {:.5} {unit}, sd {:.5} {unit}\n", summary.mean, summary.sd);
     for (p, v) in &summary.quantiles {
-        out += &format!("  q{:<5} {v:.4} m\n", p);
+        out += &format!("  q{:<5} {v:.5} {unit}\n", p);
     }
     out += &format!("{seconds:.1} s in all\n");
     Ok(out)

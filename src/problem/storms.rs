@@ -3,7 +3,7 @@
 
 use super::{PhysicalParameters, Problem};
 use crate::cancel::Never;
-use crate::dynamics::{integrate_full, integrate_reduced};
+use crate::dynamics::{ModalMotion, integrate_full, integrate_reduced};
 use crate::error::Result;
 use crate::uncertainty::{Rng, rng_from_seed, stream_seed};
 use crate::wind::{CoarseModalForces, ModalForces, Workspace};
@@ -37,8 +37,10 @@ pub struct StormRun {
     pub roof: Vec<f64>,
     /// Modal forces that drove it (absent for full-order runs from the field).
     pub modal_forces: Option<ModalForces>,
-    /// Modal displacement histories of a reduced-order run.
-    pub modal_displacements: Option<Vec<Vec<f64>>>,
+    /// Modal displacements and the integrator's velocities of a reduced-order run.
+    pub modal_motion: Option<ModalMotion>,
+    /// Floor displacement histories of a full-order run, `[floor][step]` (m).
+    pub floor_displacements: Option<Vec<Vec<f64>>>,
     pub wind_seconds: f64,
     pub integration_seconds: f64,
 }
@@ -107,7 +109,8 @@ impl Problem {
                 Ok(StormRun {
                     roof: response.roof(),
                     modal_forces: Some(forces),
-                    modal_displacements: Some(response.displacements),
+                    modal_motion: Some(response.motion()),
+                    floor_displacements: None,
                     wind_seconds,
                     integration_seconds,
                 })
@@ -121,7 +124,14 @@ impl Problem {
                 let response = integrate_full(&system, &dampers, &forces, dt, &Never)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
                 let roof = response.displacements.last().cloned().unwrap_or_default();
-                Ok(StormRun { roof, modal_forces: None, modal_displacements: None, wind_seconds, integration_seconds })
+                Ok(StormRun {
+                    roof,
+                    modal_forces: None,
+                    modal_motion: None,
+                    floor_displacements: Some(response.displacements),
+                    wind_seconds,
+                    integration_seconds,
+                })
             }
         }
     }
