@@ -4,8 +4,8 @@ use super::args::{ResponseArgs, out_format, write_out};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    ExceedanceCurve, Response, automatic_thresholds, check_confidence, exceedance_curve, exceedance_svg,
-    metamodel_peaks,
+    ExceedanceCurve, Response, STANDARD_GRAVITY, automatic_thresholds, check_confidence, exceedance_curve,
+    exceedance_svg, metamodel_peaks,
 };
 use crate::error::{Error, Result};
 use crate::uncertainty::parse_assignment;
@@ -90,12 +90,20 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
         "lower",
         "upper"
     );
+    let milli_g = matches!(response, Response::Acceleration { .. });
+    if milli_g {
+        out.insert_str(out.len() - 1, &format!("  {:>10}", "x (milli-g)"));
+    }
     let step = (thresholds.len() / 12).max(1);
     for i in (0..thresholds.len()).step_by(step) {
         out += &format!(
-            "{:>12.5}  {:>10.4}  {:>10.4}  {:>10.4}\n",
+            "{:>12.5}  {:>10.4}  {:>10.4}  {:>10.4}",
             curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]
         );
+        if milli_g {
+            out += &format!("  {:>11.2}", curve.thresholds[i] / STANDARD_GRAVITY * 1e3);
+        }
+        out += "\n";
     }
     Ok(out)
 }

@@ -1,6 +1,7 @@
 //! `windmeta simulate`: one storm through the reference model.
 
 use super::ProblemArgs;
+use crate::analysis::{RESPONSE_KINDS, Response, STANDARD_GRAVITY, profile_responses, reference_peak};
 use crate::error::{Error, Result};
 use crate::problem::{Order, WindPath};
 use crate::uncertainty::rng_from_seed;
@@ -66,6 +67,23 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
         }
         writer.flush().map_err(|e| Error::invalid("out", e.to_string()))?;
     }
+    // Every response at every floor where it exists (a full-order run has no accelerations).
+    let mut peaks = serde_json::Map::new();
+    let mut largest = Vec::new();
+    for kind in RESPONSE_KINDS {
+        if kind == "acceleration" && args.full_order {
+            continue;
+        }
+        let responses = profile_responses(kind, &problem)?;
+        let values = responses.iter().map(|&r| reference_peak(&problem, &x, &run, r)).collect::<Result<Vec<f64>>>()?;
+        let (at, most) = responses
+            .iter()
+            .zip(&values)
+            .fold((responses[0], 0.0), |best, (r, v)| if *v > best.1 { (*r, *v) } else { best });
+        largest.push((at, most));
+        let floors: Vec<usize> = responses.iter().map(Response::floor).collect();
+        peaks.insert(kind.to_string(), json!({"unit": responses[0].unit(), "floors": floors, "peaks": values}));
+    }
     let inputs: serde_json::Map<String, serde_json::Value> =
         problem.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
     let order_name = if args.full_order { "full" } else { "reduced" };
@@ -85,6 +103,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
             "peak_roof_displacement_m": peak,
             "peak_time_s": peak_index as f64 * dt,
             "mean_roof_displacement_m": run.roof.iter().sum::<f64>() / run.roof.len() as f64,
+            "peaks": peaks,
             "timings_s": {"setup": setup_seconds, "wind": run.wind_seconds, "integration": run.integration_seconds},
         });
         return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
@@ -97,6 +116,14 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
         out += &format!("  {name:<15} {value}\n");
     }
     out += &format!("peak roof displacement  {peak:.4} m at t = {:.2} s\n", peak_index as f64 * dt);
+    out += "largest peaks up the height (every floor's in --json):\n";
+    for (response, value) in &largest {
+        out += &format!("  {:<45} {value:.5} {}", response.describe(), response.unit());
+        if let Response::Acceleration { .. } = response {
+            out += &format!(" ({:.2} milli-g)", value / STANDARD_GRAVITY * 1e3);
+        }
+        out += "\n";
+    }
     out += &format!(
         "time: setup {:.3} s, wind {:.3} s, integration {:.3} s\n",
         setup_seconds, run.wind_seconds, run.integration_seconds
