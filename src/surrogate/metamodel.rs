@@ -329,8 +329,11 @@ pub enum Reduction<'a> {
     Combination(&'a [f64]),
     /// Responses of the motion and the loads (any, accelerations and damper forces included), by
     /// a sink built for the batch: lane i's physical inputs at i, and the scales of its blocks.
-    Motion(&'a (dyn Fn(&[&[f64]], &ModalScales) -> Result<Box<dyn MotionSink>> + Sync)),
+    Motion(&'a SinkFactory<'a>),
 }
+
+/// Builds a batch's [`MotionSink`] from its lanes' physical inputs and its blocks' scales.
+pub type SinkFactory<'a> = dyn Fn(&[&[f64]], &ModalScales) -> Result<Box<dyn MotionSink>> + Sync + 'a;
 
 /// The scales of the free run's blocks, per mode: the output ŷ_m is (y_m − levels[m])/outputs[m]
 /// and the input q̂_m is (Q_m − Q̄_m)/inputs[m], `levels[m]` the static level of every lane.

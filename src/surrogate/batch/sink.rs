@@ -6,12 +6,15 @@ use crate::surrogate::narx::{DIVERGENCE_BOUND, diverged};
 /// Steps per block: the granularity of the divergence test and of [`Sink::Blocks`].
 pub(super) const BLOCK: usize = 512;
 
+/// `consume(first, outputs, inputs)` of [`Sink::Blocks`].
+pub type BlockConsumer<'a> = dyn FnMut(usize, &[Lanes], &[Lanes]) + 'a;
+
 /// What a batch produces from its scaled outputs ŷ.
 pub enum Sink<'a> {
     /// Every block to `consume(first, outputs, inputs)`, `outputs[i·modes + m]` being mode m's
     /// scaled output at step first + i and `inputs[i·modes + m]` the scaled input deviation it
     /// read there, one value per lane.
-    Blocks(&'a mut dyn FnMut(usize, &[Lanes], &[Lanes])),
+    Blocks(&'a mut BlockConsumer<'a>),
     /// Per lane the peak over the storm of |offset + Σ_m gain_m ŷ_m| (a response u = Σ_m w_m y_m
     /// with y_m = level_m + scale_m ŷ_m: gain_m = w_m scale_m, offset = Σ_m w_m level_m), formed
     /// inside the batch's own vectorised code.
