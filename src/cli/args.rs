@@ -3,7 +3,7 @@
 use crate::analysis::Response;
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
-use crate::uncertainty::parse_assignment;
+use crate::uncertainty::{InputModel, parse_assignment};
 use clap::Args;
 use std::path::PathBuf;
 
@@ -57,6 +57,20 @@ impl ProblemArgs {
         }
         Ok(problem)
     }
+}
+
+/// A metamodel's input model with the wind speed `wind_speed` and the `--fix NAME=VALUE`
+/// assignments held.
+pub fn held_inputs(inputs: &InputModel, wind_speed: Option<f64>, fix: &[String]) -> Result<InputModel> {
+    let mut inputs = inputs.clone();
+    if let Some(v) = wind_speed {
+        inputs = inputs.with_fixed("wind_speed", v)?;
+    }
+    for assignment in fix {
+        let (name, value) = parse_assignment(assignment)?;
+        inputs = inputs.with_fixed(&name, value)?;
+    }
+    Ok(inputs)
 }
 
 /// Which peak response a command is about.

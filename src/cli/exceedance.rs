@@ -1,6 +1,6 @@
 //! `windmeta exceedance`: the exceedance curve of a peak response, sampled from a metamodel.
 
-use super::args::{ResponseArgs, out_format, write_out};
+use super::args::{ResponseArgs, held_inputs, out_format, write_out};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
@@ -8,7 +8,6 @@ use crate::analysis::{
     exceedance_svg, metamodel_peaks,
 };
 use crate::error::{Error, Result};
-use crate::uncertainty::parse_assignment;
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -54,14 +53,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, problem) = read_metamodel(&args.model)?;
     let response = args.response.response(&problem)?;
-    let mut inputs = problem.inputs.clone();
-    if let Some(v) = args.wind_speed {
-        inputs = inputs.with_fixed("wind_speed", v)?;
-    }
-    for assignment in &args.fix {
-        let (name, value) = parse_assignment(assignment)?;
-        inputs = inputs.with_fixed(&name, value)?;
-    }
+    let inputs = held_inputs(&problem.inputs, args.wind_speed, &args.fix)?;
     if let Some(t) = &args.thresholds
         && (t.is_empty() || t.iter().any(|x| !x.is_finite()))
     {

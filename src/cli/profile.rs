@@ -1,12 +1,11 @@
 //! `windmeta profile`: the profile of a quantile of a response's peaks up the height, sampled from
 //! a metamodel.
 
-use super::args::{AnalysisArgs, answer, out_format};
+use super::args::{AnalysisArgs, answer, held_inputs, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{PeakProfile, check_confidence, check_quantile, metamodel_profiles, profile_svg};
 use crate::error::Result;
-use crate::uncertainty::parse_assignment;
 use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -53,14 +52,7 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
     check_confidence(args.analysis.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, problem) = read_metamodel(&args.model)?;
-    let mut inputs = problem.inputs.clone();
-    if let Some(v) = args.wind_speed {
-        inputs = inputs.with_fixed("wind_speed", v)?;
-    }
-    for assignment in &args.fix {
-        let (name, value) = parse_assignment(assignment)?;
-        inputs = inputs.with_fixed(&name, value)?;
-    }
+    let inputs = held_inputs(&problem.inputs, args.wind_speed, &args.fix)?;
     let kind = args.response.replace('-', "_");
     let started = Instant::now();
     let seed = args.analysis.seed;
