@@ -17,8 +17,9 @@
 //! ones that cannot raise the peak.
 
 use super::Response;
+use super::response::damper_below;
 use crate::dynamics::power;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::problem::{MAX_MODES, Problem};
 use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
 
@@ -48,12 +49,7 @@ pub fn motion_sink(
                 }
                 Response::DamperForce { floor } => {
                     response.check(&problem.structure)?;
-                    let damper = problem.structure.dampers.iter().position(|d| d.upper_floor + 1 == floor);
-                    Target::DamperForce {
-                        damper: damper.ok_or_else(|| {
-                            Error::invalid("floor", format!("the storey below floor {floor} has no damper"))
-                        })?,
-                    }
+                    Target::DamperForce { damper: damper_below(&problem.structure, floor)? }
                 }
                 _ => {
                     let weights = response.modal_weights(shapes, &problem.structure)?.expect("a combination");

@@ -4,6 +4,7 @@
 //! damper forces of its floors (velocities by central differences), not accelerations, which would
 //! need the full equations of motion.
 
+use super::response::damper_below;
 use super::{Response, ResponseView};
 use crate::dynamics::{ModalMotion, SampleModel};
 use crate::error::{Error, Result};
@@ -30,19 +31,20 @@ pub fn reference_peak(problem: &Problem, x: &[f64], run: &StormRun, response: Re
         if floor == 1 { at(1).to_vec() } else { at(floor).iter().zip(at(floor - 1)).map(|(a, b)| a - b).collect() }
     };
     let peak = |history: &[f64]| history.iter().fold(0.0, |m: f64, v| m.max(v.abs()));
-    let damper = |floor: usize| {
-        problem.structure.dampers.iter().position(|d| d.upper_floor + 1 == floor).expect("checked above")
-    };
     Ok(match response {
         Response::Displacement { floor } => peak(at(floor)),
         Response::Drift { floor } => peak(&storey(floor)),
-        Response::DamperStroke { floor } => problem.structure.dampers[damper(floor)].cos_angle * peak(&storey(floor)),
+        Response::DamperStroke { floor } => {
+            problem.structure.dampers[damper_below(&problem.structure, floor)?].cos_angle * peak(&storey(floor))
+        }
         Response::DamperForce { floor } => {
-            let d = damper(floor);
-            let motion = ModalMotion::from_displacements(floors.clone(), problem.storm.time_step);
-            let velocity =
-                |t: usize| -> f64 { dampers.floor_weights[d].iter().map(|&(f, w)| w * motion.velocities[f][t]).sum() };
-            let fastest = (0..problem.storm.steps()).map(velocity).fold(0.0, |m: f64, v| m.max(v.abs()));
+            // The damper's axial displacement (a combination of floors), then its velocity.
+            let d = damper_below(&problem.structure, floor)?;
+            let steps = problem.storm.steps();
+            let axial: Vec<f64> =
+                (0..steps).map(|t| dampers.floor_weights[d].iter().map(|&(f, w)| w * floors[f][t]).sum()).collect();
+            let motion = ModalMotion::from_displacements(vec![axial], problem.storm.time_step);
+            let fastest = motion.velocities[0].iter().fold(0.0, |m: f64, v| m.max(v.abs()));
             dampers.force(d, fastest).abs()
         }
         Response::Acceleration { .. } => {

@@ -166,7 +166,7 @@ impl Response {
 }
 
 /// The index of the damper in the storey below `floor` (1-based).
-fn damper_below(structure: &Structure, floor: usize) -> Result<usize> {
+pub(super) fn damper_below(structure: &Structure, floor: usize) -> Result<usize> {
     structure
         .dampers
         .iter()
