@@ -61,10 +61,11 @@ pub fn motion_sink(
                     Target::Combination { gains, offsets }
                 }
             };
-            Ok(Tracked { target, linear: Vec::new(), speed: Vec::new(), best: [0.0; LANES] })
+            Ok(Tracked { target, best: [0.0; LANES] })
         })
         .collect::<Result<_>>()?;
     let zero = [[0.0; LANES]; MAX_MODES];
+    let accelerations = responses.iter().any(|r| matches!(r, Response::Acceleration { .. }));
     Ok(Box::new(MotionPeaks {
         time_step: problem.storm.time_step,
         modes: lanes.inverse_masses.len(),
@@ -76,8 +77,12 @@ pub fn motion_sink(
         current_input: zero,
         seen: 0,
         velocities: Vec::new(),
+        linear: accelerations.then(Vec::new),
+        chunk_linear: Vec::new(),
+        chunk_speed: Vec::new(),
         forces: vec![0.0; problem.structure.dampers.len()],
         exact: ExactSteps::default(),
+        scratch: Scratch::default(),
     }))
 }
 
@@ -143,18 +148,10 @@ impl LaneModels {
 
 /// What is tracked.
 enum Target {
-    /// A floor's acceleration, every lane: L = Σ_m (loads_m q̂_m + velocities_m ŷ'_m +
-    /// displacements_m (ŷ_m − ŷ_m(0))) with φ_m folded in, N = Σ_m modal_m g_m with
-    /// modal_m = φ_m/M_m and g_m the modal damper force, and the bound's P and K_m
-    /// (|N| ≤ P (Σ_m K_m |ŷ'_m|)^α).
-    Acceleration {
-        loads: Vec<Lanes>,
-        velocities: Vec<Lanes>,
-        displacements: Vec<Lanes>,
-        modal: Vec<Lanes>,
-        bound: Lanes,
-        k: Vec<Lanes>,
-    },
+    /// A floor's acceleration, every lane: L = Σ_m φ_m ℓ_m with ℓ_m the modal linear parts the
+    /// sink shares between floors, N = Σ_m modal_m g_m with modal_m = φ_m/M_m and g_m the modal
+    /// damper force, and the bound's P and K_m (|N| ≤ P (Σ_m K_m |ŷ'_m|)^α).
+    Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes> },
     /// A damper's force: the peak is c·max|v|^α, so only its fastest velocity is tracked.
     DamperForce { damper: usize },
     /// A combination Σ_m w_m y_m (displacement, drift, stroke): offsets Σ_m w_m level_m per lane
@@ -163,8 +160,8 @@ enum Target {
 }
 
 impl Target {
-    fn acceleration(lanes: &LaneModels, weights: &[f64]) -> Target {
-        let modes = weights.len();
+    fn acceleration(lanes: &LaneModels, shape: &[f64]) -> Target {
+        let modes = shape.len();
         let alpha = lanes.exponent;
         let h: Vec<Lanes> = lanes
             .map
@@ -172,7 +169,7 @@ impl Target {
             .zip(&lanes.coefficients)
             .map(|(g, c)| {
                 std::array::from_fn(|l| {
-                    c[l] * (0..modes).map(|m| weights[m] * g[m] * lanes.inverse_masses[m][l]).sum::<f64>()
+                    c[l] * (0..modes).map(|m| shape[m] * g[m] * lanes.inverse_masses[m][l]).sum::<f64>()
                 })
             })
             .collect();
@@ -190,27 +187,15 @@ impl Target {
             }
             bound[l] = if alpha <= 1.0 { total.powf(1.0 - alpha) } else { total };
         }
-        let fold = |per_mode: &[Lanes], sign: f64| -> Vec<Lanes> {
-            per_mode.iter().zip(weights).map(|(c, w)| c.map(|c| sign * w * c)).collect()
-        };
-        Target::Acceleration {
-            loads: fold(&lanes.load_gains, 1.0),
-            velocities: fold(&lanes.damping, -1.0),
-            displacements: fold(&lanes.stiffness, -1.0),
-            modal: fold(&lanes.inverse_masses, 1.0),
-            bound,
-            k,
-        }
+        let modal = lanes.inverse_masses.iter().zip(shape).map(|(c, w)| c.map(|c| w * c)).collect();
+        Target::Acceleration { shape: shape.to_vec(), modal, bound, k }
     }
 }
 
-/// A response tracked through the storm, every lane: for an acceleration, L and Σ_m K_m|ŷ'_m| of
-/// the block's processed steps; the running peak (|a|, max |v| for a damper force, |u| for a
-/// combination).
+/// A response tracked through the storm and its running peak in every lane (|a|, max |v| for a
+/// damper force, |u| for a combination).
 struct Tracked {
     target: Target,
-    linear: Vec<Lanes>,
-    speed: Vec<Lanes>,
     best: Lanes,
 }
 
@@ -229,11 +214,19 @@ struct MotionPeaks {
     current: Modal,
     current_input: Modal,
     seen: usize,
-    /// The block's processed steps' scaled modal velocities, `velocities[i·M + m]`, every lane.
+    /// The block's processed steps, every lane, `[i·M + m]`: the scaled modal velocities ŷ'_m and,
+    /// when an acceleration is tracked, the modal linear parts
+    /// ℓ_m = (r_m/M_m) q̂_m − 2ζω_m s_m ŷ'_m − ω_m² s_m (ŷ_m − ŷ_m(0)), shared by every floor.
     velocities: Vec<Lanes>,
+    linear: Option<Vec<Lanes>>,
+    /// Per chunk of [`CHUNK`] steps and mode, max |ℓ_m| and max |ŷ'_m|, `[c·M + m]`: a floor's
+    /// chunk is ruled out by Σ_m |φ_m| max|ℓ_m| and Σ_m K_m max|ŷ'_m| without looking at its steps.
+    chunk_linear: Vec<Lanes>,
+    chunk_speed: Vec<Lanes>,
     /// Scratch: one lane's damper velocities, then f(v), at a step computed exactly.
     forces: Vec<f64>,
     exact: ExactSteps,
+    scratch: Scratch,
 }
 
 impl MotionSink for MotionPeaks {
@@ -300,10 +293,20 @@ impl MotionSink for MotionPeaks {
 
 impl MotionPeaks {
     /// The step whose velocities were pushed last, from its outputs `y` and inputs `q`: the
-    /// combinations' and damper velocities' peaks, an acceleration's L and Σ_m K_m|ŷ'_m|.
+    /// combinations' and damper velocities' peaks, and the modal linear parts ℓ_m.
     #[inline(always)]
     fn step(&mut self, y: &[Lanes], q: &[Lanes]) {
         let v = &self.velocities[self.velocities.len() - self.modes..];
+        if let Some(linear) = &mut self.linear {
+            let lanes = &self.lanes;
+            for m in 0..self.modes {
+                let (y, q, v, rest) = (&y[m], &q[m], &v[m], &self.rest[m]);
+                let (load, damping, stiffness) = (&lanes.load_gains[m], &lanes.damping[m], &lanes.stiffness[m]);
+                linear.push(std::array::from_fn(|l| {
+                    load[l].mul_add(q[l], (-damping[l]).mul_add(v[l], -stiffness[l] * (y[l] - rest[l])))
+                }));
+            }
+        }
         for tracked in &mut self.targets {
             match &tracked.target {
                 Target::Combination { gains, offsets } => {
@@ -320,38 +323,50 @@ impl MotionPeaks {
                     }
                     (0..LANES).for_each(|l| tracked.best[l] = tracked.best[l].max(u[l].abs()));
                 }
-                Target::Acceleration { loads, velocities, displacements, k, .. } => {
-                    let mut linear = [0.0; LANES];
-                    let mut speed = [0.0; LANES];
-                    for m in 0..self.modes {
-                        let (y, q, v, rest) = (&y[m], &q[m], &v[m], &self.rest[m]);
-                        let (load, velocity, displacement, k) = (&loads[m], &velocities[m], &displacements[m], &k[m]);
-                        for l in 0..LANES {
-                            linear[l] = load[l].mul_add(
-                                q[l],
-                                velocity[l].mul_add(v[l], displacement[l].mul_add(y[l] - rest[l], linear[l])),
-                            );
-                            speed[l] = k[l].mul_add(v[l].abs(), speed[l]);
-                        }
-                    }
-                    tracked.linear.push(linear);
-                    tracked.speed.push(speed);
-                }
+                Target::Acceleration { .. } => {}
             }
         }
     }
 
     /// The block's accelerations into their running peaks.
     fn reduce(&mut self) {
-        self.exact.next_block(self.velocities.len() / self.modes.max(1));
-        for Tracked { target, linear, speed, best } in &mut self.targets {
-            if let Target::Acceleration { modal, bound, .. } = target {
-                let steps = Steps { velocities: &self.velocities, linear, speed };
-                let work = (&mut self.forces[..], &mut self.exact);
-                reduce_accelerations(&self.lanes, &steps, self.modes, (modal, bound), best, work);
-                linear.clear();
-                speed.clear();
+        if let Some(linear) = &mut self.linear {
+            let modes = self.modes;
+            let count = self.velocities.len() / modes;
+            self.chunk_linear.clear();
+            self.chunk_speed.clear();
+            for first in (0..count).step_by(CHUNK) {
+                let range = first * modes..(first + CHUNK).min(count) * modes;
+                for m in 0..modes {
+                    let (mut most_linear, mut most_speed) = ([0.0f64; LANES], [0.0f64; LANES]);
+                    for (x, v) in
+                        linear[range.clone()].iter().zip(&self.velocities[range.clone()]).skip(m).step_by(modes)
+                    {
+                        (0..LANES).for_each(|l| {
+                            most_linear[l] = most_linear[l].max(x[l].abs());
+                            most_speed[l] = most_speed[l].max(v[l].abs());
+                        });
+                    }
+                    self.chunk_linear.push(most_linear);
+                    self.chunk_speed.push(most_speed);
+                }
             }
+            self.exact.next_block(count);
+            let steps = Steps {
+                velocities: &self.velocities,
+                linear,
+                chunk_linear: &self.chunk_linear,
+                chunk_speed: &self.chunk_speed,
+                modes,
+            };
+            for Tracked { target, best } in &mut self.targets {
+                if let Target::Acceleration { shape, modal, bound, k } = target {
+                    let floor = Floor { shape, modal, bound, k };
+                    let work = (&mut self.forces[..], &mut self.exact, &mut self.scratch);
+                    reduce_acceleration(&self.lanes, &steps, &floor, best, work);
+                }
+            }
+            linear.clear();
         }
         self.velocities.clear();
     }
@@ -359,36 +374,36 @@ impl MotionPeaks {
 
 /// Per lane, the block's chunks of [`CHUNK`] steps in decreasing order of their bound, and in a
 /// chunk its steps likewise, computed exactly until the bound falls below the running peak: the
-/// largest accelerations come first and rule out the rest.
-fn reduce_accelerations(
+/// largest accelerations come first and rule out the rest. A chunk's bound comes from the modes'
+/// chunk maxima (|L| ≤ Σ_m |φ_m| max|ℓ_m|), so a floor looks at the steps of few chunks only.
+fn reduce_acceleration(
     lanes: &LaneModels,
     steps: &Steps,
-    modes: usize,
-    (modal, bound): (&[Lanes], &Lanes),
+    floor: &Floor,
     peaks: &mut Lanes,
-    (forces, exact): (&mut [f64], &mut ExactSteps),
+    (forces, exact, scratch): (&mut [f64], &mut ExactSteps, &mut Scratch),
 ) {
     let alpha = lanes.exponent;
+    let Floor { shape, modal, bound, k } = *floor;
+    let Steps { velocities, linear, chunk_linear, chunk_speed, modes } = *steps;
     let most = |l: usize, linear: f64, speed: f64| (1.0 + BOUND_MARGIN) * (linear + bound[l] * power(speed, alpha));
-    let Steps { velocities, linear, speed } = *steps;
-    let count = linear.len();
-    let mut chunks: Vec<(f64, usize)> = Vec::with_capacity(count.div_ceil(CHUNK));
-    let mut candidates: Vec<(f64, usize)> = Vec::with_capacity(CHUNK);
-    // Each chunk's largest |L| and Σ_m K_m|ŷ'_m|, every lane in one pass.
-    let largest: Vec<(Lanes, Lanes)> = (0..count)
-        .step_by(CHUNK)
-        .map(|first| {
-            let range = first..(first + CHUNK).min(count);
-            let (mut most_linear, mut most_speed) = ([0.0f64; LANES], [0.0f64; LANES]);
-            for (x, s) in linear[range.clone()].iter().zip(&speed[range]) {
+    let count = velocities.len() / modes;
+    // Each chunk's bounds on |L| and Σ_m K_m|ŷ'_m|, every lane at once.
+    scratch.coarse.clear();
+    scratch.coarse.extend(chunk_linear.chunks_exact(modes).zip(chunk_speed.chunks_exact(modes)).map(
+        |(most_linear, most_speed)| {
+            let (mut x, mut s) = ([0.0f64; LANES], [0.0f64; LANES]);
+            for m in 0..modes {
+                let (phi, k) = (shape[m].abs(), &k[m]);
                 (0..LANES).for_each(|l| {
-                    most_linear[l] = most_linear[l].max(x[l].abs());
-                    most_speed[l] = most_speed[l].max(s[l]);
+                    x[l] = phi.mul_add(most_linear[m][l], x[l]);
+                    s[l] = k[l].mul_add(most_speed[m][l], s[l]);
                 });
             }
-            (most_linear, most_speed)
-        })
-        .collect();
+            (x, s)
+        },
+    ));
+    let Scratch { coarse, chunks, candidates } = scratch;
     for (l, best) in peaks.iter_mut().enumerate() {
         // A chunk with |L| ≤ best/2 and P S^α ≤ best/2 cannot beat the peak; most chunks are
         // ruled out so, by comparisons with one power per lane and block.
@@ -396,46 +411,41 @@ fn reduce_accelerations(
         let slow = if bound[l] > 0.0 { power(half / bound[l], 1.0 / alpha) } else { f64::INFINITY };
         chunks.clear();
         chunks.extend(
-            largest
+            coarse
                 .iter()
                 .enumerate()
                 .filter(|(_, (linear, speed))| linear[l] > half || speed[l] > slow)
                 .map(|(c, (linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
         );
         chunks.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-        for &(chunk_bound, first) in &chunks {
+        for &(chunk_bound, first) in chunks.iter() {
             if chunk_bound <= *best {
                 break;
             }
             candidates.clear();
-            candidates
-                .extend((first..(first + CHUNK).min(count)).map(|i| (most(l, linear[i][l].abs(), speed[i][l]), i)));
+            let (mut most_linear, mut most_speed) = (0.0f64, 0.0f64);
+            for i in first..(first + CHUNK).min(count) {
+                let (mut x, mut s) = (0.0, 0.0);
+                for m in 0..modes {
+                    x = shape[m].mul_add(linear[i * modes + m][l], x);
+                    s = k[m][l].mul_add(velocities[i * modes + m][l].abs(), s);
+                }
+                most_linear = most_linear.max(x.abs());
+                most_speed = most_speed.max(s);
+                candidates.push((s, i, x));
+            }
+            if most(l, most_linear, most_speed) <= *best {
+                continue;
+            }
+            candidates.iter_mut().for_each(|c| c.0 = most(l, c.2.abs(), c.0));
             candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
-            for &(step_bound, i) in &candidates {
+            for &(step_bound, i, x) in candidates.iter() {
                 if step_bound <= *best {
                     break;
                 }
-                let key = i * LANES + l;
-                if exact.stamps[key] != exact.block {
-                    let v = &velocities[i * modes..(i + 1) * modes];
-                    for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
-                        *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
-                    }
-                    for force in forces.iter_mut() {
-                        *force = power(force.abs(), alpha).copysign(*force);
-                    }
-                    for (m, g) in exact.modal[key][..modes].iter_mut().enumerate() {
-                        *g = forces
-                            .iter()
-                            .zip(&lanes.map)
-                            .zip(&lanes.coefficients)
-                            .map(|((f, g), c)| g[m] * c[l] * f)
-                            .sum();
-                    }
-                    exact.stamps[key] = exact.block;
-                }
-                let dampers: f64 = modal.iter().zip(&exact.modal[key]).map(|(modal, g)| modal[l] * g).sum();
-                *best = best.max((linear[i][l] - dampers).abs());
+                let g = exact.modal_forces(i, l, velocities, lanes, forces);
+                let dampers: f64 = modal.iter().zip(g).map(|(modal, g)| modal[l] * g).sum();
+                *best = best.max((x - dampers).abs());
             }
         }
     }
@@ -462,14 +472,61 @@ impl ExactSteps {
             self.modal.resize(steps * LANES, [0.0; MAX_MODES]);
         }
     }
+
+    /// Step i's modal damper forces in lane l, computed (with `forces` as scratch) unless a floor
+    /// already did.
+    fn modal_forces(
+        &mut self,
+        i: usize,
+        l: usize,
+        velocities: &[Lanes],
+        lanes: &LaneModels,
+        forces: &mut [f64],
+    ) -> &[f64] {
+        let modes = lanes.inverse_masses.len();
+        let key = i * LANES + l;
+        if self.stamps[key] != self.block {
+            let v = &velocities[i * modes..(i + 1) * modes];
+            for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
+                *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
+            }
+            for force in forces.iter_mut() {
+                *force = power(force.abs(), lanes.exponent).copysign(*force);
+            }
+            for (m, g) in self.modal[key][..modes].iter_mut().enumerate() {
+                *g = forces.iter().zip(&lanes.map).zip(&lanes.coefficients).map(|((f, g), c)| g[m] * c[l] * f).sum();
+            }
+            self.stamps[key] = self.block;
+        }
+        &self.modal[key][..modes]
+    }
 }
 
 /// A block's processed steps as an acceleration's reduction reads them, every lane: the modal
-/// velocities `velocities[i·M + m]`, L and Σ_m K_m|ŷ'_m|.
+/// velocities ŷ'_m and linear parts ℓ_m, `[i·M + m]`, and their chunk maxima `[c·M + m]`.
 struct Steps<'a> {
     velocities: &'a [Lanes],
     linear: &'a [Lanes],
-    speed: &'a [Lanes],
+    chunk_linear: &'a [Lanes],
+    chunk_speed: &'a [Lanes],
+    modes: usize,
+}
+
+/// A floor's acceleration as [`Target::Acceleration`] holds it.
+struct Floor<'a> {
+    shape: &'a [f64],
+    modal: &'a [Lanes],
+    bound: &'a Lanes,
+    k: &'a [Lanes],
+}
+
+/// Buffers reused from block to block: the floor's chunk bounds (|L|, Σ_m K_m|ŷ'_m| every lane),
+/// one lane's chunks (bound, first step) and one chunk's steps (bound, step, L).
+#[derive(Default)]
+struct Scratch {
+    coarse: Vec<(Lanes, Lanes)>,
+    chunks: Vec<(f64, usize)>,
+    candidates: Vec<(f64, usize, f64)>,
 }
 
 #[cfg(test)]
