@@ -151,7 +151,8 @@ enum Target {
     /// A floor's acceleration, every lane: L = Σ_m φ_m ℓ_m with ℓ_m the modal linear parts the
     /// sink shares between floors, N = Σ_m modal_m g_m with modal_m = φ_m/M_m and g_m the modal
     /// damper force, and the bound's P and K_m (|N| ≤ P (Σ_m K_m |ŷ'_m|)^α).
-    Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes> },
+    /// `gates` hold each lane's [`Gate`].
+    Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes>, gates: [Gate; LANES] },
     /// A damper's force: the peak is c·max|v|^α, so only its fastest velocity is tracked.
     DamperForce { damper: usize },
     /// A combination Σ_m w_m y_m (displacement, drift, stroke): offsets Σ_m w_m level_m per lane
@@ -188,7 +189,7 @@ impl Target {
             bound[l] = if alpha <= 1.0 { total.powf(1.0 - alpha) } else { total };
         }
         let modal = lanes.inverse_masses.iter().zip(shape).map(|(c, w)| c.map(|c| w * c)).collect();
-        Target::Acceleration { shape: shape.to_vec(), modal, bound, k }
+        Target::Acceleration { shape: shape.to_vec(), modal, bound, k, gates: [Gate::default(); LANES] }
     }
 }
 
@@ -360,10 +361,10 @@ impl MotionPeaks {
                 modes,
             };
             for Tracked { target, best } in &mut self.targets {
-                if let Target::Acceleration { shape, modal, bound, k } = target {
-                    let floor = Floor { shape, modal, bound, k };
+                if let Target::Acceleration { shape, modal, bound, k, gates } = target {
+                    let floor = Floor { shape, modal, bound, k, gates };
                     let work = (&mut self.forces[..], &mut self.exact, &mut self.scratch);
-                    reduce_acceleration(&self.lanes, &steps, &floor, best, work);
+                    reduce_acceleration(&self.lanes, &steps, floor, best, work);
                 }
             }
             linear.clear();
@@ -379,12 +380,12 @@ impl MotionPeaks {
 fn reduce_acceleration(
     lanes: &LaneModels,
     steps: &Steps,
-    floor: &Floor,
+    floor: Floor,
     peaks: &mut Lanes,
     (forces, exact, scratch): (&mut [f64], &mut ExactSteps, &mut Scratch),
 ) {
     let alpha = lanes.exponent;
-    let Floor { shape, modal, bound, k } = *floor;
+    let Floor { shape, modal, bound, k, gates } = floor;
     let Steps { velocities, linear, chunk_linear, chunk_speed, modes } = *steps;
     let most = |l: usize, linear: f64, speed: f64| (1.0 + BOUND_MARGIN) * (linear + bound[l] * power(speed, alpha));
     let count = velocities.len() / modes;
@@ -404,17 +405,14 @@ fn reduce_acceleration(
         },
     ));
     let Scratch { coarse, chunks, candidates } = scratch;
-    for (l, best) in peaks.iter_mut().enumerate() {
-        // A chunk with |L| ≤ best/2 and P S^α ≤ best/2 cannot beat the peak; most chunks are
-        // ruled out so, by comparisons with one power per lane and block.
-        let half = 0.5 * *best / (1.0 + BOUND_MARGIN);
-        let slow = if bound[l] > 0.0 { power(half / bound[l], 1.0 / alpha) } else { f64::INFINITY };
+    for (l, (best, gate)) in peaks.iter_mut().zip(gates.iter_mut()).enumerate() {
+        gate.open_to(*best, bound[l], alpha);
         chunks.clear();
         chunks.extend(
             coarse
                 .iter()
                 .enumerate()
-                .filter(|(_, (linear, speed))| linear[l] > half || speed[l] > slow)
+                .filter(|(_, (linear, speed))| gate.may_beat(linear[l], speed[l]))
                 .map(|(c, (linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
         );
         chunks.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
@@ -422,22 +420,18 @@ fn reduce_acceleration(
             if chunk_bound <= *best {
                 break;
             }
+            gate.open_to(*best, bound[l], alpha);
             candidates.clear();
-            let (mut most_linear, mut most_speed) = (0.0f64, 0.0f64);
             for i in first..(first + CHUNK).min(count) {
                 let (mut x, mut s) = (0.0, 0.0);
                 for m in 0..modes {
                     x = shape[m].mul_add(linear[i * modes + m][l], x);
                     s = k[m][l].mul_add(velocities[i * modes + m][l].abs(), s);
                 }
-                most_linear = most_linear.max(x.abs());
-                most_speed = most_speed.max(s);
-                candidates.push((s, i, x));
+                if gate.may_beat(x.abs(), s) {
+                    candidates.push((most(l, x.abs(), s), i, x));
+                }
             }
-            if most(l, most_linear, most_speed) <= *best {
-                continue;
-            }
-            candidates.iter_mut().for_each(|c| c.0 = most(l, c.2.abs(), c.0));
             candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
             for &(step_bound, i, x) in candidates.iter() {
                 if step_bound <= *best {
@@ -448,6 +442,50 @@ fn reduce_acceleration(
                 *best = best.max((x - dampers).abs());
             }
         }
+    }
+}
+
+/// Whether a chunk's or a step's |L| and S = Σ_m K_m|ŷ'_m| could beat a lane's running peak,
+/// (1 + ε)(|L| + P S^α) > best, told without a power per test: |L| is placed on a grid of
+/// [`GATE_BINS`] intervals of best/(1 + ε), and S compared with the speed that the interval's top
+/// leaves room for, ((1 − (j + 1)/B) best/((1 + ε) P))^{1/α}. Conservative (it lets through a
+/// little more than the bound would), and recomputed only when the peak rises.
+#[derive(Clone, Copy)]
+struct Gate {
+    best: f64,
+    reach: f64,
+    slow: [f64; GATE_BINS + 1],
+}
+
+/// Intervals of |L| in a [`Gate`].
+const GATE_BINS: usize = 16;
+
+impl Default for Gate {
+    fn default() -> Self {
+        Gate { best: f64::NAN, reach: 0.0, slow: [0.0; GATE_BINS + 1] }
+    }
+}
+
+impl Gate {
+    /// The gate for a running peak `best` and the bound's P and α.
+    fn open_to(&mut self, best: f64, p: f64, alpha: f64) {
+        if best == self.best {
+            return;
+        }
+        self.best = best;
+        self.reach = best / (1.0 + BOUND_MARGIN);
+        for (j, slow) in self.slow.iter_mut().enumerate() {
+            let room = (1.0 - j as f64 / GATE_BINS as f64) * self.reach;
+            *slow = if p > 0.0 { (room / p).powf(1.0 / alpha) } else { f64::INFINITY };
+        }
+    }
+
+    fn may_beat(&self, linear: f64, speed: f64) -> bool {
+        if !(linear < self.reach) {
+            return true;
+        }
+        let j = (linear / self.reach * GATE_BINS as f64) as usize;
+        speed > self.slow[(j + 1).min(GATE_BINS)]
     }
 }
 
@@ -518,6 +556,7 @@ struct Floor<'a> {
     modal: &'a [Lanes],
     bound: &'a Lanes,
     k: &'a [Lanes],
+    gates: &'a mut [Gate; LANES],
 }
 
 /// Buffers reused from block to block: the floor's chunk bounds (|L|, Σ_m K_m|ŷ'_m| every lane),
