@@ -151,8 +151,8 @@ enum Target {
     /// A floor's acceleration, every lane: L = Σ_m φ_m ℓ_m with ℓ_m the modal linear parts the
     /// sink shares between floors, N = Σ_m modal_m g_m with modal_m = φ_m/M_m and g_m the modal
     /// damper force, and the bound's P and K_m (|N| ≤ P (Σ_m K_m |ŷ'_m|)^α).
-    /// `gates` hold each lane's [`Gate`].
-    Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes>, gates: [Gate; LANES] },
+    /// `gates`: which chunks and steps could beat each lane's running peak.
+    Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes>, gates: Gates },
     /// A damper's force: the peak is c·max|v|^α, so only its fastest velocity is tracked.
     DamperForce { damper: usize },
     /// A combination Σ_m w_m y_m (displacement, drift, stroke): offsets Σ_m w_m level_m per lane
@@ -189,7 +189,7 @@ impl Target {
             bound[l] = if alpha <= 1.0 { total.powf(1.0 - alpha) } else { total };
         }
         let modal = lanes.inverse_masses.iter().zip(shape).map(|(c, w)| c.map(|c| w * c)).collect();
-        Target::Acceleration { shape: shape.to_vec(), modal, bound, k, gates: [Gate::default(); LANES] }
+        Target::Acceleration { shape: shape.to_vec(), modal, bound, k, gates: Gates::default() }
     }
 }
 
@@ -390,6 +390,7 @@ fn reduce_acceleration(
     let most = |l: usize, linear: f64, speed: f64| (1.0 + BOUND_MARGIN) * (linear + bound[l] * power(speed, alpha));
     let count = velocities.len() / modes;
     // Each chunk's bounds on |L| and Σ_m K_m|ŷ'_m|, every lane at once.
+    (0..LANES).for_each(|l| gates.open_to(l, peaks[l], bound[l], alpha));
     scratch.coarse.clear();
     scratch.coarse.extend(chunk_linear.chunks_exact(modes).zip(chunk_speed.chunks_exact(modes)).map(
         |(most_linear, most_speed)| {
@@ -401,26 +402,28 @@ fn reduce_acceleration(
                     s[l] = k[l].mul_add(most_speed[m][l], s[l]);
                 });
             }
-            (x, s)
+            (gates.lanes_that_may_beat(&x, &s), x, s)
         },
     ));
     let Scratch { coarse, chunks, candidates } = scratch;
-    for (l, (best, gate)) in peaks.iter_mut().zip(gates.iter_mut()).enumerate() {
-        gate.open_to(*best, bound[l], alpha);
+    for (l, best) in peaks.iter_mut().enumerate() {
         chunks.clear();
         chunks.extend(
             coarse
                 .iter()
                 .enumerate()
-                .filter(|(_, (linear, speed))| gate.may_beat(linear[l], speed[l]))
-                .map(|(c, (linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
+                .filter(|(_, (lanes, linear, speed))| {
+                    lanes & (1 << l) != 0 && gates.lanes[l].may_beat(linear[l], speed[l])
+                })
+                .map(|(c, (_, linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
         );
         chunks.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
         for &(chunk_bound, first) in chunks.iter() {
             if chunk_bound <= *best {
                 break;
             }
-            gate.open_to(*best, bound[l], alpha);
+            gates.open_to(l, *best, bound[l], alpha);
+            let gate = &gates.lanes[l];
             candidates.clear();
             for i in first..(first + CHUNK).min(count) {
                 let (mut x, mut s) = (0.0, 0.0);
@@ -457,6 +460,65 @@ struct Gate {
     slow: [f64; GATE_BINS + 1],
 }
 
+/// Every lane's [`Gate`], and a test of all lanes at once that comes first: for α < 1, P S^α lies
+/// below its tangents at the speeds S_t where P S_t^α = f_t best/(1 + ε), so a chunk with
+/// |L| + min_t (a_t + b_t S) ≤ best/(1 + ε) cannot beat the peak (a_t = (1 − α) f_t best/(1 + ε),
+/// b_t = α f_t best/((1 + ε) S_t)); a few multiply-adds for eight lanes rule out most chunks.
+/// For α ≥ 1 (convex, no tangent above it) every lane is let through to its gate.
+struct Gates {
+    lanes: [Gate; LANES],
+    reach: Lanes,
+    offsets: [Lanes; TANGENTS.len()],
+    slopes: [Lanes; TANGENTS.len()],
+}
+
+/// The fractions f_t of the running peak at whose speeds the tangents touch.
+const TANGENTS: [f64; 5] = [1.0, 0.6, 0.3, 0.12, 0.04];
+
+impl Default for Gates {
+    fn default() -> Self {
+        let pass = [f64::INFINITY; LANES];
+        Gates {
+            lanes: [Gate::default(); LANES],
+            reach: [0.0; LANES],
+            offsets: [pass; TANGENTS.len()],
+            slopes: [[0.0; LANES]; TANGENTS.len()],
+        }
+    }
+}
+
+impl Gates {
+    /// Lane l's gate and tangents for its running peak `best` and the bound's P and α.
+    fn open_to(&mut self, l: usize, best: f64, p: f64, alpha: f64) {
+        if !self.lanes[l].open_to(best, p, alpha) {
+            return;
+        }
+        let reach = self.lanes[l].reach;
+        self.reach[l] = reach;
+        for (t, f) in TANGENTS.iter().enumerate() {
+            let (offset, slope) = if p == 0.0 {
+                (0.0, 0.0)
+            } else if alpha < 1.0 && reach > 0.0 {
+                let speed = (f * reach / p).powf(1.0 / alpha);
+                ((1.0 - alpha) * f * reach, alpha * f * reach / speed)
+            } else {
+                (f64::INFINITY, 0.0)
+            };
+            self.offsets[t][l] = offset;
+            self.slopes[t][l] = slope;
+        }
+    }
+
+    /// The lanes (bit l) whose peak a chunk with these |L| and S bounds could beat.
+    fn lanes_that_may_beat(&self, linear: &Lanes, speed: &Lanes) -> u8 {
+        let mut damper = [f64::INFINITY; LANES];
+        for (offset, slope) in self.offsets.iter().zip(&self.slopes) {
+            (0..LANES).for_each(|l| damper[l] = damper[l].min(slope[l].mul_add(speed[l], offset[l])));
+        }
+        (0..LANES).fold(0, |mask, l| mask | (u8::from(!(linear[l] + damper[l] <= self.reach[l])) << l))
+    }
+}
+
 /// Intervals of |L| in a [`Gate`].
 const GATE_BINS: usize = 16;
 
@@ -467,10 +529,10 @@ impl Default for Gate {
 }
 
 impl Gate {
-    /// The gate for a running peak `best` and the bound's P and α.
-    fn open_to(&mut self, best: f64, p: f64, alpha: f64) {
+    /// The gate for a running peak `best` and the bound's P and α; whether it changed.
+    fn open_to(&mut self, best: f64, p: f64, alpha: f64) -> bool {
         if best == self.best {
-            return;
+            return false;
         }
         self.best = best;
         self.reach = best / (1.0 + BOUND_MARGIN);
@@ -478,6 +540,7 @@ impl Gate {
             let room = (1.0 - j as f64 / GATE_BINS as f64) * self.reach;
             *slow = if p > 0.0 { (room / p).powf(1.0 / alpha) } else { f64::INFINITY };
         }
+        true
     }
 
     fn may_beat(&self, linear: f64, speed: f64) -> bool {
@@ -556,14 +619,15 @@ struct Floor<'a> {
     modal: &'a [Lanes],
     bound: &'a Lanes,
     k: &'a [Lanes],
-    gates: &'a mut [Gate; LANES],
+    gates: &'a mut Gates,
 }
 
-/// Buffers reused from block to block: the floor's chunk bounds (|L|, Σ_m K_m|ŷ'_m| every lane),
+/// Buffers reused from block to block: the floor's chunk bounds (the lanes they may beat, |L| and
+/// Σ_m K_m|ŷ'_m| every lane),
 /// one lane's chunks (bound, first step) and one chunk's steps (bound, step, L).
 #[derive(Default)]
 struct Scratch {
-    coarse: Vec<(Lanes, Lanes)>,
+    coarse: Vec<(u8, Lanes, Lanes)>,
     chunks: Vec<(f64, usize)>,
     candidates: Vec<(f64, usize, f64)>,
 }
