@@ -39,7 +39,7 @@ pub fn motion_sink(
     scales: &ModalScales,
 ) -> Result<Box<dyn MotionSink>> {
     let lanes = LaneModels::new(problem, inputs, scales)?;
-    let targets = responses
+    let targets: Vec<Tracked> = responses
         .iter()
         .map(|response| {
             let target = match *response {
@@ -70,6 +70,7 @@ pub fn motion_sink(
         time_step: problem.storm.time_step,
         modes: lanes.inverse_masses.len(),
         lanes,
+        stepped: (0..targets.len()).filter(|&t| !matches!(targets[t].target, Target::Acceleration { .. })).collect(),
         targets,
         rest: zero,
         previous: zero,
@@ -208,6 +209,8 @@ struct MotionPeaks {
     modes: usize,
     lanes: LaneModels,
     targets: Vec<Tracked>,
+    /// The targets other than accelerations, which take every step (accelerations take blocks).
+    stepped: Vec<usize>,
     /// ŷ(0), and the last block's last two outputs and last inputs: a step is processed once its
     /// successor has arrived, for its central difference.
     rest: Modal,
@@ -308,7 +311,8 @@ impl MotionPeaks {
                 }));
             }
         }
-        for tracked in &mut self.targets {
+        for &t in &self.stepped {
+            let tracked = &mut self.targets[t];
             match &tracked.target {
                 Target::Combination { gains, offsets } => {
                     let mut u = *offsets;
