@@ -153,7 +153,7 @@ enum Target {
     /// sink shares between floors, N = Σ_m modal_m g_m with modal_m = φ_m/M_m and g_m the modal
     /// damper force, and the bound's P and K_m (|N| ≤ P (Σ_m K_m |ŷ'_m|)^α).
     /// `gates`: which chunks and steps could beat each lane's running peak.
-    Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes>, gates: Gates },
+    Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes>, gates: Box<Gates> },
     /// A damper's force: the peak is c·max|v|^α, so only its fastest velocity is tracked.
     DamperForce { damper: usize },
     /// A combination Σ_m w_m y_m (displacement, drift, stroke): offsets Σ_m w_m level_m per lane
@@ -190,7 +190,7 @@ impl Target {
             bound[l] = if alpha <= 1.0 { total.powf(1.0 - alpha) } else { total };
         }
         let modal = lanes.inverse_masses.iter().zip(shape).map(|(c, w)| c.map(|c| w * c)).collect();
-        Target::Acceleration { shape: shape.to_vec(), modal, bound, k, gates: Gates::default() }
+        Target::Acceleration { shape: shape.to_vec(), modal, bound, k, gates: Box::default() }
     }
 }
 
@@ -519,7 +519,11 @@ impl Gates {
         for (offset, slope) in self.offsets.iter().zip(&self.slopes) {
             (0..LANES).for_each(|l| damper[l] = damper[l].min(slope[l].mul_add(speed[l], offset[l])));
         }
-        (0..LANES).fold(0, |mask, l| mask | (u8::from(!(linear[l] + damper[l] <= self.reach[l])) << l))
+        // NaN lets a lane through, to be looked at.
+        (0..LANES).fold(0, |mask, l| {
+            let most = linear[l] + damper[l];
+            mask | (u8::from(most > self.reach[l] || most.is_nan()) << l)
+        })
     }
 }
 
@@ -548,7 +552,7 @@ impl Gate {
     }
 
     fn may_beat(&self, linear: f64, speed: f64) -> bool {
-        if !(linear < self.reach) {
+        if linear >= self.reach || linear.is_nan() {
             return true;
         }
         let j = (linear / self.reach * GATE_BINS as f64) as usize;
