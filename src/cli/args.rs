@@ -59,18 +59,35 @@ impl ProblemArgs {
     }
 }
 
-/// A metamodel's input model with the wind speed `wind_speed` and the `--fix NAME=VALUE`
-/// assignments held.
-pub fn held_inputs(inputs: &InputModel, wind_speed: Option<f64>, fix: &[String]) -> Result<InputModel> {
-    let mut inputs = inputs.clone();
-    if let Some(v) = wind_speed {
-        inputs = inputs.with_fixed("wind_speed", v)?;
+/// A metamodel sampled with some inputs held, as exceedance curves and profiles take it.
+#[derive(Debug, Clone, Args)]
+pub struct SamplingArgs {
+    #[arg(long)]
+    pub model: PathBuf,
+    #[arg(long, default_value_t = 10_000)]
+    pub samples: usize,
+    /// Hold the mean wind speed (m/s): an answer conditional on it.
+    #[arg(long, allow_negative_numbers = true)]
+    pub wind_speed: Option<f64>,
+    /// Hold any input, e.g. --fix damping_ratio=0.02 (repeatable).
+    #[arg(long = "fix", value_name = "NAME=VALUE")]
+    pub fix: Vec<String>,
+}
+
+impl SamplingArgs {
+    /// The metamodel's input model `inputs` with the wind speed and the `--fix NAME=VALUE`
+    /// assignments held.
+    pub fn held_inputs(&self, inputs: &InputModel) -> Result<InputModel> {
+        let mut inputs = inputs.clone();
+        if let Some(v) = self.wind_speed {
+            inputs = inputs.with_fixed("wind_speed", v)?;
+        }
+        for assignment in &self.fix {
+            let (name, value) = parse_assignment(assignment)?;
+            inputs = inputs.with_fixed(&name, value)?;
+        }
+        Ok(inputs)
     }
-    for assignment in fix {
-        let (name, value) = parse_assignment(assignment)?;
-        inputs = inputs.with_fixed(&name, value)?;
-    }
-    Ok(inputs)
 }
 
 /// Which peak response a command is about.

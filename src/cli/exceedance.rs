@@ -1,6 +1,6 @@
 //! `windmeta exceedance`: the exceedance curve of a peak response, sampled from a metamodel.
 
-use super::args::{ResponseArgs, held_inputs, out_format, write_out};
+use super::args::{ResponseArgs, SamplingArgs, out_format, write_out};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
@@ -15,20 +15,12 @@ use std::time::Instant;
 
 #[derive(Debug, Clone, Args)]
 pub struct ExceedanceArgs {
-    #[arg(long)]
-    pub model: PathBuf,
-    #[arg(long, default_value_t = 10_000)]
-    pub samples: usize,
+    #[command(flatten)]
+    pub sampling: SamplingArgs,
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     #[command(flatten)]
     pub response: ResponseArgs,
-    /// Hold the mean wind speed (m/s): a curve conditional on it.
-    #[arg(long, allow_negative_numbers = true)]
-    pub wind_speed: Option<f64>,
-    /// Hold any input, e.g. --fix damping_ratio=0.02 (repeatable).
-    #[arg(long = "fix", value_name = "NAME=VALUE")]
-    pub fix: Vec<String>,
     /// Thresholds in the response's unit (m, m/s² or N), comma separated; automatic when absent.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub thresholds: Option<Vec<f64>>,
@@ -51,16 +43,17 @@ fn csv_text(curve: &ExceedanceCurve, response: &Response) -> String {
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     check_confidence(args.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
-    let (metamodel, problem) = read_metamodel(&args.model)?;
+    let (metamodel, problem) = read_metamodel(&args.sampling.model)?;
     let response = args.response.response(&problem)?;
-    let inputs = held_inputs(&problem.inputs, args.wind_speed, &args.fix)?;
+    let inputs = args.sampling.held_inputs(&problem.inputs)?;
     if let Some(t) = &args.thresholds
         && (t.is_empty() || t.iter().any(|x| !x.is_finite()))
     {
         return Err(Error::invalid("thresholds", "must be a non-empty list of finite numbers"));
     }
     let started = Instant::now();
-    let peaks = metamodel_peaks(&metamodel, &problem, &inputs, args.samples, args.seed, response, &Counter(started))?;
+    let peaks =
+        metamodel_peaks(&metamodel, &problem, &inputs, args.sampling.samples, args.seed, response, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
     let curve = exceedance_curve(&peaks, &thresholds, args.confidence);
@@ -74,7 +67,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
         };
         write_out(path, &text)?;
     }
-    let mut out = format!("peak {what}: {} samples in {seconds:.2} s\n", args.samples);
+    let mut out = format!("peak {what}: {} samples in {seconds:.2} s\n", args.sampling.samples);
     out += &format!(
         "{:>12}  {:>10}  {:>10}  {:>10}\n",
         &format!("x ({})", response.unit()),

@@ -1,7 +1,7 @@
 //! `windmeta profile`: the profile of a quantile of a response's peaks up the height, sampled from
 //! a metamodel.
 
-use super::args::{AnalysisArgs, answer, held_inputs, out_format};
+use super::args::{AnalysisArgs, SamplingArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{PeakProfile, check_confidence, check_quantile, metamodel_profiles, profile_svg};
@@ -12,10 +12,8 @@ use std::time::Instant;
 
 #[derive(Debug, Clone, Args)]
 pub struct ProfileArgs {
-    #[arg(long)]
-    pub model: PathBuf,
-    #[arg(long, default_value_t = 10_000)]
-    pub samples: usize,
+    #[command(flatten)]
+    pub sampling: SamplingArgs,
     /// The response at every floor: displacement, drift, acceleration, damper_force or
     /// damper_stroke (the floors above a damper).
     #[arg(long, default_value = "drift")]
@@ -23,12 +21,6 @@ pub struct ProfileArgs {
     /// Probability of the quantile profiled, e.g. 0.9 for the peak one storm in ten exceeds.
     #[arg(long, default_value_t = 0.9, allow_negative_numbers = true)]
     pub quantile: f64,
-    /// Hold the mean wind speed (m/s).
-    #[arg(long, allow_negative_numbers = true)]
-    pub wind_speed: Option<f64>,
-    /// Hold any input, e.g. --fix damping_ratio=0.02 (repeatable).
-    #[arg(long = "fix", value_name = "NAME=VALUE")]
-    pub fix: Vec<String>,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the profile: .csv, .json or .svg by extension.
@@ -51,12 +43,13 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
     check_quantile(args.quantile)?;
     check_confidence(args.analysis.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
-    let (metamodel, problem) = read_metamodel(&args.model)?;
-    let inputs = held_inputs(&problem.inputs, args.wind_speed, &args.fix)?;
+    let (metamodel, problem) = read_metamodel(&args.sampling.model)?;
+    let inputs = args.sampling.held_inputs(&problem.inputs)?;
     let kind = args.response.replace('-', "_");
     let started = Instant::now();
     let seed = args.analysis.seed;
-    let samples = metamodel_profiles(&metamodel, &problem, &inputs, args.samples, seed, &kind, &Counter(started))?;
+    let samples =
+        metamodel_profiles(&metamodel, &problem, &inputs, args.sampling.samples, seed, &kind, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let profile = samples.quantile_profile(args.quantile, args.analysis.confidence)?;
     let label = format!("peak {} ({})", kind.replace('_', " "), profile.unit);
