@@ -19,12 +19,15 @@
 //! chunk maxima of |ℓ_m| and |ẏ_m| before looking at its steps, and a step's modal damper forces,
 //! once computed, serve every floor.
 
+mod gates;
+
 use super::Response;
 use super::response::damper_below;
 use crate::dynamics::power;
 use crate::error::Result;
 use crate::problem::{MAX_MODES, Problem};
 use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
+use gates::Gates;
 
 /// Steps whose bound is taken together before any of them is looked at one by one.
 const CHUNK: usize = 32;
@@ -455,114 +458,6 @@ fn reduce_acceleration(
     }
 }
 
-/// Whether a chunk's or a step's |L| and S = Σ_m K_m|ŷ'_m| could beat a lane's running peak,
-/// (1 + ε)(|L| + P S^α) > best, told without a power per test: |L| is placed on a grid of
-/// [`GATE_BINS`] intervals of best/(1 + ε), and S compared with the speed that the interval's top
-/// leaves room for, ((1 − (j + 1)/B) best/((1 + ε) P))^{1/α}. Conservative (it lets through a
-/// little more than the bound would), and recomputed only when the peak rises.
-#[derive(Clone, Copy)]
-struct Gate {
-    best: f64,
-    reach: f64,
-    slow: [f64; GATE_BINS + 1],
-}
-
-/// Every lane's [`Gate`], and a test of all lanes at once that comes first: for α < 1, P S^α lies
-/// below its tangents at the speeds S_t where P S_t^α = f_t best/(1 + ε), so a chunk with
-/// |L| + min_t (a_t + b_t S) ≤ best/(1 + ε) cannot beat the peak (a_t = (1 − α) f_t best/(1 + ε),
-/// b_t = α f_t best/((1 + ε) S_t)); a few multiply-adds for eight lanes rule out most chunks.
-/// For α ≥ 1 (convex, no tangent above it) every lane is let through to its gate.
-struct Gates {
-    lanes: [Gate; LANES],
-    reach: Lanes,
-    offsets: [Lanes; TANGENTS.len()],
-    slopes: [Lanes; TANGENTS.len()],
-}
-
-/// The fractions f_t of the running peak at whose speeds the tangents touch.
-const TANGENTS: [f64; 5] = [1.0, 0.6, 0.3, 0.12, 0.04];
-
-impl Default for Gates {
-    fn default() -> Self {
-        let pass = [f64::INFINITY; LANES];
-        Gates {
-            lanes: [Gate::default(); LANES],
-            reach: [0.0; LANES],
-            offsets: [pass; TANGENTS.len()],
-            slopes: [[0.0; LANES]; TANGENTS.len()],
-        }
-    }
-}
-
-impl Gates {
-    /// Lane l's gate and tangents for its running peak `best` and the bound's P and α.
-    fn open_to(&mut self, l: usize, best: f64, p: f64, alpha: f64) {
-        if !self.lanes[l].open_to(best, p, alpha) {
-            return;
-        }
-        let reach = self.lanes[l].reach;
-        self.reach[l] = reach;
-        for (t, f) in TANGENTS.iter().enumerate() {
-            let (offset, slope) = if p == 0.0 {
-                (0.0, 0.0)
-            } else if alpha < 1.0 && reach > 0.0 {
-                let speed = (f * reach / p).powf(1.0 / alpha);
-                ((1.0 - alpha) * f * reach, alpha * f * reach / speed)
-            } else {
-                (f64::INFINITY, 0.0)
-            };
-            self.offsets[t][l] = offset;
-            self.slopes[t][l] = slope;
-        }
-    }
-
-    /// The lanes (bit l) whose peak a chunk with these |L| and S bounds could beat.
-    fn lanes_that_may_beat(&self, linear: &Lanes, speed: &Lanes) -> u8 {
-        let mut damper = [f64::INFINITY; LANES];
-        for (offset, slope) in self.offsets.iter().zip(&self.slopes) {
-            (0..LANES).for_each(|l| damper[l] = damper[l].min(slope[l].mul_add(speed[l], offset[l])));
-        }
-        // NaN lets a lane through, to be looked at.
-        (0..LANES).fold(0, |mask, l| {
-            let most = linear[l] + damper[l];
-            mask | (u8::from(most > self.reach[l] || most.is_nan()) << l)
-        })
-    }
-}
-
-/// Intervals of |L| in a [`Gate`].
-const GATE_BINS: usize = 16;
-
-impl Default for Gate {
-    fn default() -> Self {
-        Gate { best: f64::NAN, reach: 0.0, slow: [0.0; GATE_BINS + 1] }
-    }
-}
-
-impl Gate {
-    /// The gate for a running peak `best` and the bound's P and α; whether it changed.
-    fn open_to(&mut self, best: f64, p: f64, alpha: f64) -> bool {
-        if best == self.best {
-            return false;
-        }
-        self.best = best;
-        self.reach = best / (1.0 + BOUND_MARGIN);
-        for (j, slow) in self.slow.iter_mut().enumerate() {
-            let room = (1.0 - j as f64 / GATE_BINS as f64) * self.reach;
-            *slow = if p > 0.0 { (room / p).powf(1.0 / alpha) } else { f64::INFINITY };
-        }
-        true
-    }
-
-    fn may_beat(&self, linear: f64, speed: f64) -> bool {
-        if linear >= self.reach || linear.is_nan() {
-            return true;
-        }
-        let j = (linear / self.reach * GATE_BINS as f64) as usize;
-        speed > self.slow[(j + 1).min(GATE_BINS)]
-    }
-}
-
 /// The modal damper forces g_m of the block's (step, lane) pairs computed exactly, shared by every
 /// floor's acceleration: `modal[i·LANES + l]`, valid where `stamps` holds the block's number.
 #[derive(Default)]
@@ -644,92 +539,4 @@ struct Scratch {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::analysis::ResponseView;
-    use crate::dynamics::{ModalMotion, SampleModel};
-    use crate::wind::ModalForces;
-
-    /// Fed synthetic scaled histories in uneven blocks, the sink's peaks equal those of the same
-    /// physical histories through [`SampleModel`] (every damper at every step), for damper laws
-    /// below, at and above α = 1 (the bound's two forms), in every lane; the damper force too.
-    #[test]
-    fn peaks_equal_those_of_every_step_for_any_exponent() {
-        let mut problem = Problem::preset("frame40-kn").unwrap().with_storm(30.0, 0.01).unwrap();
-        let steps = problem.storm.steps();
-        let modes = problem.modes.count();
-        // Storm-like amplitudes, and small ones where the dampers' term rules the accelerations
-        // (their force falls only as |v|^α), so that its bound decides which steps are looked at.
-        let amplitudes = [(vec![0.02, 0.005, 0.001], vec![3e5, 1e5, 5e4]), (vec![2e-5; 3], vec![1e2; 3])];
-        let x = problem.inputs.means();
-        let inputs: Vec<&[f64]> = vec![&x[..]; LANES];
-        // Lane l, mode m: a few incommensurate sines, different per lane.
-        let output = |l: usize, m: usize, t: usize| -> f64 {
-            let t = t as f64 * problem.storm.time_step;
-            let (a, b) = (1.0 + 0.1 * l as f64, (m + 1) as f64);
-            (a * b * 1.3 * t).sin() + 0.4 * (a * 5.1 * t + b).sin() + 0.1 * (17.0 * t).cos() + 0.3
-        };
-        let input = |l: usize, m: usize, t: usize| -> f64 { (0.7 * (l + m + 1) as f64 * t as f64 * 0.01).cos() };
-        for (alpha, (outputs, inputs_scale)) in
-            [0.38, 1.0, 1.7].into_iter().flat_map(|a| amplitudes.iter().map(move |s| (a, s)))
-        {
-            problem.damper_exponent = alpha;
-            let scales =
-                ModalScales { outputs: outputs.clone(), inputs: inputs_scale.clone(), levels: vec![[0.0; LANES]; 3] };
-            let floors = problem.structure.floors();
-            let shapes: Vec<Vec<f64>> =
-                (0..modes).map(|m| (0..floors).map(|f| problem.modes.shapes[(f, m)]).collect()).collect();
-            let run = |responses: &[Response]| -> Vec<Lanes> {
-                let mut sink = motion_sink(&problem, &shapes, responses, &inputs, &scales).unwrap();
-                let mut first = 0;
-                for len in [1usize, 2, 511, 512, 37].into_iter().cycle() {
-                    let len = len.min(steps - first);
-                    let block = |f: &dyn Fn(usize, usize, usize) -> f64| -> Vec<Lanes> {
-                        (first..first + len)
-                            .flat_map(|t| (0..modes).map(move |m| (t, m)))
-                            .map(|(t, m)| std::array::from_fn(|l| f(l, m, t)))
-                            .collect()
-                    };
-                    sink.take(first, &block(&output), &block(&input));
-                    first += len;
-                    if first == steps {
-                        break;
-                    }
-                }
-                sink.finish()
-            };
-            let responses = [
-                Response::Acceleration { floor: floors },
-                Response::Acceleration { floor: 9 },
-                Response::DamperForce { floor: 5 },
-            ];
-            // Together (the accelerations sharing their exact steps' damper forces) as alone.
-            assert_eq!(run(&responses), responses.iter().map(|r| run(&[*r])[0]).collect::<Vec<_>>());
-            for response in responses {
-                let peaks = run(&[response])[0];
-                for (l, peak) in peaks.iter().enumerate() {
-                    let p = problem.parameters(&x).unwrap();
-                    let (sample_modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p).unwrap());
-                    let model = SampleModel::new(&sample_modes, p.damping_ratio, &dampers);
-                    let displacements = (0..modes)
-                        .map(|m| (0..steps).map(|t| scales.outputs[m] * output(l, m, t) + 1.0).collect())
-                        .collect();
-                    let motion = ModalMotion::from_displacements(displacements, problem.storm.time_step);
-                    let forces = ModalForces {
-                        mean: vec![0.0; modes],
-                        series: (0..modes)
-                            .map(|m| (0..steps).map(|t| scales.inputs[m] * input(l, m, t)).collect())
-                            .collect(),
-                    };
-                    let view = ResponseView::new(&shapes, &problem.structure, &motion, &model, &forces);
-                    let expected = response.peak(&view).unwrap();
-                    assert!(
-                        (peak - expected).abs() <= 1e-9 * expected,
-                        "α = {alpha}, {}, lane {l}: {peak} vs {expected}",
-                        response.describe()
-                    );
-                }
-            }
-        }
-    }
-}
+mod tests;

@@ -1,0 +1,113 @@
+//! Which chunks and steps of a block could raise a floor's peak acceleration, told with few
+//! powers: the tests ahead of the exact evaluation in [`super::reduce_acceleration`].
+
+use super::BOUND_MARGIN;
+use crate::surrogate::{LANES, Lanes};
+
+/// Whether a chunk's or a step's |L| and S = Σ_m K_m|ŷ'_m| could beat a lane's running peak,
+/// (1 + ε)(|L| + P S^α) > best, told without a power per test: |L| is placed on a grid of
+/// [`GATE_BINS`] intervals of best/(1 + ε), and S compared with the speed that the interval's top
+/// leaves room for, ((1 − (j + 1)/B) best/((1 + ε) P))^{1/α}. Conservative (it lets through a
+/// little more than the bound would), and recomputed only when the peak rises.
+#[derive(Clone, Copy)]
+pub(super) struct Gate {
+    best: f64,
+    reach: f64,
+    slow: [f64; GATE_BINS + 1],
+}
+
+/// Every lane's [`Gate`], and a test of all lanes at once that comes first: for α < 1, P S^α lies
+/// below its tangents at the speeds S_t where P S_t^α = f_t best/(1 + ε), so a chunk with
+/// |L| + min_t (a_t + b_t S) ≤ best/(1 + ε) cannot beat the peak (a_t = (1 − α) f_t best/(1 + ε),
+/// b_t = α f_t best/((1 + ε) S_t)); a few multiply-adds for eight lanes rule out most chunks.
+/// For α ≥ 1 (convex, no tangent above it) every lane is let through to its gate.
+pub(super) struct Gates {
+    pub(super) lanes: [Gate; LANES],
+    reach: Lanes,
+    offsets: [Lanes; TANGENTS.len()],
+    slopes: [Lanes; TANGENTS.len()],
+}
+
+/// The fractions f_t of the running peak at whose speeds the tangents touch.
+const TANGENTS: [f64; 5] = [1.0, 0.6, 0.3, 0.12, 0.04];
+
+impl Default for Gates {
+    fn default() -> Self {
+        let pass = [f64::INFINITY; LANES];
+        Gates {
+            lanes: [Gate::default(); LANES],
+            reach: [0.0; LANES],
+            offsets: [pass; TANGENTS.len()],
+            slopes: [[0.0; LANES]; TANGENTS.len()],
+        }
+    }
+}
+
+impl Gates {
+    /// Lane l's gate and tangents for its running peak `best` and the bound's P and α.
+    pub(super) fn open_to(&mut self, l: usize, best: f64, p: f64, alpha: f64) {
+        if !self.lanes[l].open_to(best, p, alpha) {
+            return;
+        }
+        let reach = self.lanes[l].reach;
+        self.reach[l] = reach;
+        for (t, f) in TANGENTS.iter().enumerate() {
+            let (offset, slope) = if p == 0.0 {
+                (0.0, 0.0)
+            } else if alpha < 1.0 && reach > 0.0 {
+                let speed = (f * reach / p).powf(1.0 / alpha);
+                ((1.0 - alpha) * f * reach, alpha * f * reach / speed)
+            } else {
+                (f64::INFINITY, 0.0)
+            };
+            self.offsets[t][l] = offset;
+            self.slopes[t][l] = slope;
+        }
+    }
+
+    /// The lanes (bit l) whose peak a chunk with these |L| and S bounds could beat.
+    pub(super) fn lanes_that_may_beat(&self, linear: &Lanes, speed: &Lanes) -> u8 {
+        let mut damper = [f64::INFINITY; LANES];
+        for (offset, slope) in self.offsets.iter().zip(&self.slopes) {
+            (0..LANES).for_each(|l| damper[l] = damper[l].min(slope[l].mul_add(speed[l], offset[l])));
+        }
+        // NaN lets a lane through, to be looked at.
+        (0..LANES).fold(0, |mask, l| {
+            let most = linear[l] + damper[l];
+            mask | (u8::from(most > self.reach[l] || most.is_nan()) << l)
+        })
+    }
+}
+
+/// Intervals of |L| in a [`Gate`].
+const GATE_BINS: usize = 16;
+
+impl Default for Gate {
+    fn default() -> Self {
+        Gate { best: f64::NAN, reach: 0.0, slow: [0.0; GATE_BINS + 1] }
+    }
+}
+
+impl Gate {
+    /// The gate for a running peak `best` and the bound's P and α; whether it changed.
+    fn open_to(&mut self, best: f64, p: f64, alpha: f64) -> bool {
+        if best == self.best {
+            return false;
+        }
+        self.best = best;
+        self.reach = best / (1.0 + BOUND_MARGIN);
+        for (j, slow) in self.slow.iter_mut().enumerate() {
+            let room = (1.0 - j as f64 / GATE_BINS as f64) * self.reach;
+            *slow = if p > 0.0 { (room / p).powf(1.0 / alpha) } else { f64::INFINITY };
+        }
+        true
+    }
+
+    pub(super) fn may_beat(&self, linear: f64, speed: f64) -> bool {
+        if linear >= self.reach || linear.is_nan() {
+            return true;
+        }
+        let j = (linear / self.reach * GATE_BINS as f64) as usize;
+        speed > self.slow[(j + 1).min(GATE_BINS)]
+    }
+}
