@@ -87,6 +87,24 @@ async fn calibrate_follow_fetch_and_sample() {
     let (s, ct, body) =
         problem(app.post(&path, json!({"samples": 8, "response": "damper_force", "floor": 99})).await).await;
     assert_problem(s, &ct, &body, 422, "floor");
+    // A damper group's envelope: the largest of its dampers', at least the one below floor 32
+    // (group 4), on the same storms.
+    let group = json!({"samples": 8, "response": "damper_force", "group": 4, "thresholds": [1000, 5000, 20000]});
+    let (status, envelope) = app.post_json(&path, group).await;
+    assert_eq!(status, 200, "{envelope}");
+    assert_eq!(envelope["response"], json!({"kind": "damper_force", "group": 4}));
+    let exceeds = |answer: &Value| -> Vec<f64> {
+        answer["probabilities"].as_array().unwrap().iter().map(|p| p.as_f64().unwrap()).collect()
+    };
+    assert!(exceeds(&envelope).iter().zip(exceeds(&in_newtons)).all(|(g, one)| *g >= one), "{envelope}");
+    for (wrong, field) in [
+        (json!({"samples": 8, "response": "drift", "group": 1}), "group"),
+        (json!({"samples": 8, "response": "damper_force", "group": 1, "floor": 3}), "group"),
+        (json!({"samples": 8, "response": "damper_force", "group": 9}), "group"),
+    ] {
+        let (s, ct, body) = problem(app.post(&path, wrong).await).await;
+        assert_problem(s, &ct, &body, 422, field);
+    }
     // The profile of the 90 % peak drift up the height, from the same storms as the curve: the
     // curve is the one without a profile, and each floor's band holds its quantile.
     let plain = json!({"samples": 60, "seed": 3, "response": "drift", "floor": 20});

@@ -65,8 +65,31 @@ fn simulate_is_reproducible_and_honours_fixed_inputs() {
     let out = windmeta(&["simulate", "--duration", "5", "--out", csv.to_str().unwrap()]);
     assert!(out.status.success());
     let text = std::fs::read_to_string(&csv).unwrap();
-    assert_eq!(text.lines().next(), Some("t_s,roof_m"));
+    assert_eq!(text.lines().next(), Some("t_s,displacement_40_m"));
     assert_eq!(text.lines().count(), 1 + 501);
+    // A full-order run's acceleration and damper-force histories at every floor: their peaks are
+    // the ones the run reports (to the file's nine significant digits).
+    let full = ["simulate", "--duration", "5", "--seed", "4", "--full-order"];
+    let histories = [&full[..], &["--out", csv.to_str().unwrap(), "--history", "acceleration"]].concat();
+    let out = windmeta(&[&histories[..], &["--history", "damper_force", "--history-floors", "all"]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let reported = json(&[&full[..], &["--json"]].concat());
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    assert_eq!((header[1], header[41], header.len()), ("acceleration_1_m_s2", "damper_force_1_n", 81));
+    let rows: Vec<Vec<f64>> =
+        text.lines().skip(1).map(|l| l.split(',').map(|v| v.parse().unwrap()).collect()).collect();
+    for (column, name) in header.iter().enumerate().skip(1) {
+        let kind = if column <= 40 { "acceleration" } else { "damper_force" };
+        let expected = reported["peaks"][kind]["peaks"][(column - 1) % 40].as_f64().unwrap();
+        let peak = rows.iter().fold(0.0f64, |m, row| m.max(row[column].abs()));
+        assert!((peak - expected).abs() <= 1e-8 * expected, "{name}: {peak} in the file, {expected} reported");
+    }
+    for (wrong, field) in [(["--history", "velocity"], "response"), (["--history-floors", "0"], "floor")] {
+        let out = windmeta(&[&histories[..], &wrong[..]].concat());
+        let message = String::from_utf8_lossy(&out.stderr);
+        assert!(out.status.code() == Some(2) && message.contains(field), "{message}");
+    }
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -106,6 +129,10 @@ fn sample_peaks_reports_every_peak_and_summaries() {
     assert_eq!(v["peaks"], again["peaks"]);
     let nominal = json(&["sample-peaks", "--samples", "2", "--duration", "20", "--nominal", "--json"]);
     assert_eq!(nominal["peaks"].as_array().unwrap().len(), 2);
+    let group = ["sample-peaks", "--samples", "2", "--duration", "20", "--response", "damper_force", "--group", "1"];
+    let envelope = json(&[&group[..], &["--json"]].concat());
+    assert_eq!(envelope["response"], serde_json::json!({"kind": "damper_force", "group": 1}));
+    assert!(envelope["peaks"].as_array().unwrap().iter().all(|p| p.as_f64().unwrap() > 0.0), "{envelope}");
 }
 
 #[test]

@@ -169,19 +169,18 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
     let floor_forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(21)).unwrap();
     let modal_forces = floor_forces.project(p.modes.shapes.as_ref());
     let dampers = p.dampers(&params).unwrap();
-    let reduced =
-        integrate_reduced(&p.sample_modes(&params), params.damping_ratio, &dampers, &modal_forces, 0.01, &Never)
-            .unwrap()
-            .roof();
+    let modes = p.sample_modes(&params);
+    let reduced_run = integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, 0.01, &Never).unwrap();
+    let reduced = reduced_run.roof();
     let system = p.full_system(&params);
-    let full = integrate_full(&system, &dampers, &floor_forces, 0.01, &Never).unwrap().displacements.pop().unwrap();
+    let mut full_motion = integrate_full(&system, &dampers, &floor_forces, 0.01, &Never).unwrap();
+    let full = full_motion.displacements.pop().unwrap();
     let peak = |u: &[f64]| u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mean = |u: &[f64]| u.iter().sum::<f64>() / u.len() as f64;
     let sd = |u: &[f64]| (u.iter().map(|v| (v - mean(u)).powi(2)).sum::<f64>() / u.len() as f64).sqrt();
     let diff: Vec<f64> = reduced.iter().zip(&full).map(|(a, b)| a - b).collect();
     // The static part differs by the truncation of modes 4-40 under the mean load, computable in
     // closed form: the 3-mode static roof displacement against the full order's initial state.
-    let modes = p.sample_modes(&params);
     let static_reduced: f64 =
         (0..3).map(|m| modal_forces.mean[m] / (modes.modal_masses[m] * modes.frequencies[m].powi(2))).sum();
     let truncation = static_reduced - full[0];
@@ -195,64 +194,78 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
     // 1 % (measured 0.16 %).
     assert!(sd(&diff) < 0.01 * sd(&full), "dynamic difference sd {} vs response sd {}", sd(&diff), sd(&full));
     assert!((peak(&reduced) / peak(&full) - 1.0).abs() < 0.01, "peaks {} vs {}", peak(&reduced), peak(&full));
+    // Roof accelerations: the reduced model's from its equations of motion, the full order's
+    // Newmark's own. Modes 4+ respond quasi-statically, with little acceleration: the peaks agree
+    // within 3 % (measured: reduced 2.0 % above full).
+    let motion = reduced_run.motion();
+    let modal_accelerations =
+        SampleModel::new(&modes, params.damping_ratio, &dampers).modal_accelerations(&motion, &modal_forces);
+    let top = p.structure.floors() - 1;
+    let reduced_acceleration: Vec<f64> = (0..full.len())
+        .map(|t| modal_accelerations.iter().enumerate().map(|(m, a)| modes.shapes[(top, m)] * a[t]).sum())
+        .collect();
+    let full_acceleration = full_motion.accelerations.pop().unwrap();
+    let ratio = peak(&reduced_acceleration) / peak(&full_acceleration);
+    assert!((ratio - 1.0).abs() < 0.03, "roof acceleration peaks: reduced/full = {ratio}");
 }
 
-/// Accelerations from the equations of motion (`SampleModel`) on the integrator's displacements
-/// and velocities: on a harmonically loaded oscillator they are the closed form's second
-/// derivative (taken by a central difference with h = 10⁻⁴ s: error ~10⁻⁸) to the load's linear
-/// interpolation, 10⁻⁴ of the amplitude at ΩΔt = 0.03.
+/// Newmark's velocities and accelerations of a full-order storm satisfy every floor's equation
+/// M ü + C u̇ + K u + Bᵀ F(B u̇) = f(t) at every step. Without dampers to rounding (10⁻⁹ of the
+/// loads); with them, to what the damper solve's tolerance allows: velocities within δ = 10⁻⁹ of
+/// the largest one (taken here as 10⁻⁸ of the storm's largest floor velocity, the solve's scale
+/// also holding the predictor) move the inertia by 2M/Δt·δ and, the law being Hölder, a damper
+/// force by at most 2^{1−α} c (Σ|w| δ)^α.
 #[test]
-fn accelerations_from_the_equations_of_motion_match_the_closed_form() {
-    let (omega, zeta, mass, force, forcing) = (4.0, 0.02, 1.0e6, 5.0e4, 3.0);
-    let dt = 0.01;
-    let steps = 3001;
-    let load: Vec<f64> = (0..steps).map(|i| force * (forcing * i as f64 * dt).sin()).collect();
-    let forces = ModalForces { mean: vec![0.0], series: vec![load] };
-    let modes = oscillator(omega, mass);
-    let dampers = no_dampers();
-    let motion = integrate_reduced(&modes, zeta, &dampers, &forces, dt, &Never).unwrap().motion();
-    let accelerations = SampleModel::new(&modes, zeta, &dampers).modal_accelerations(&motion, &forces).remove(0);
-    let exact = |t: f64| harmonic_from_rest(t, omega, zeta, force / (mass * omega * omega), forcing);
-    let h = 1e-4;
-    let amplitude = force / mass / ((1.0 - (forcing / omega).powi(2)).powi(2)).sqrt() * (forcing / omega).powi(2);
-    for (i, a) in accelerations.iter().enumerate().skip(1) {
-        let t = i as f64 * dt;
-        let second = (exact(t + h) - 2.0 * exact(t) + exact(t - h)) / (h * h);
-        assert!((a - second).abs() < 1e-3 * amplitude, "t = {t}: {a} vs {second}");
+fn full_order_motion_satisfies_the_equations_of_motion() {
+    let p = Problem::preset("frame40-kn").unwrap().with_storm(20.0, 0.01).unwrap();
+    let x = p.inputs.means();
+    let params = p.parameters(&x).unwrap();
+    let forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(8)).unwrap();
+    let system = p.full_system(&params);
+    let n = system.size;
+    let scale = forces.series.iter().flatten().fold(0.0f64, |m, f| m.max(f.abs()));
+    for dampers in [no_dampers(), p.dampers(&params).unwrap()] {
+        let motion = integrate_full(&system, &dampers, &forces, 0.01, &Never).unwrap();
+        let delta = 1e-8 * motion.velocities.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+        let mut allowed: Vec<f64> = (0..n)
+            .map(|i| 1e-9 * scale + (0..n).map(|j| system.mass[i * n + j].abs()).sum::<f64>() * 2.0 / 0.01 * delta)
+            .collect();
+        for (d, weights) in dampers.floor_weights.iter().enumerate() {
+            let reach = weights.iter().map(|(_, w)| w.abs()).sum::<f64>() * delta;
+            let force = 2f64.powf(1.0 - dampers.exponent) * dampers.coefficients[d] * reach.powf(dampers.exponent);
+            for &(f, w) in weights {
+                allowed[f] += w.abs() * force;
+            }
+        }
+        let mut worst = 0.0f64;
+        for t in 0..forces.series[0].len() {
+            let at = |history: &Vec<Vec<f64>>| -> Vec<f64> { history.iter().map(|h| h[t]).collect() };
+            let (u, v, a) = (at(&motion.displacements), at(&motion.velocities), at(&motion.accelerations));
+            let mut residual: Vec<f64> = (0..n).map(|i| -forces.series[i][t]).collect();
+            for (i, r) in residual.iter_mut().enumerate() {
+                for j in 0..n {
+                    let k = i * n + j;
+                    *r += system.mass[k] * a[j] + system.damping[k] * v[j] + system.stiffness[k] * u[j];
+                }
+            }
+            for (d, weights) in dampers.floor_weights.iter().enumerate() {
+                let force = dampers.force(d, weights.iter().map(|&(f, w)| w * v[f]).sum());
+                for &(f, w) in weights {
+                    residual[f] += w * force;
+                }
+            }
+            for (i, r) in residual.iter().enumerate() {
+                assert!(r.abs() <= allowed[i], "step {t}, floor {}: residual {r} N, allowed {} N", i + 1, allowed[i]);
+                worst = worst.max(r.abs() / allowed[i]);
+            }
+        }
+        eprintln!("{} dampers: largest residual {worst:.3} of its allowance", dampers.len());
     }
 }
 
-/// On a storm with the dampers acting, the roof acceleration from the equations of motion equals
-/// the second central difference of the integrator's roof displacement to (ωΔt)²/12 of the third
-/// mode (4·10⁻³), and the damper forces from the law on the integrator's velocities are finite and
-/// act on every storey.
-#[test]
-fn storm_accelerations_agree_with_the_displacement_history() {
-    let problem = Problem::preset("frame40-kn").unwrap().with_storm(60.0, 0.01).unwrap();
-    let x = problem.inputs.means();
-    let p = problem.parameters(&x).unwrap();
-    let forces = problem.modal_forces(&p, windmeta::problem::WindPath::Modal, &mut rng_from_seed(3)).unwrap();
-    let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p).unwrap());
-    let motion = integrate_reduced(&modes, p.damping_ratio, &dampers, &forces, 0.01, &Never).unwrap().motion();
-    let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
-    let accelerations = model.modal_accelerations(&motion, &forces);
-    let roof: Vec<f64> =
-        (0..motion.displacements[0].len()).map(|t| motion.displacements.iter().map(|y| y[t]).sum()).collect();
-    let roof_acceleration: Vec<f64> = (0..roof.len()).map(|t| accelerations.iter().map(|a| a[t]).sum()).collect();
-    let peak = roof_acceleration.iter().fold(0.0f64, |m, a| m.max(a.abs()));
-    let worst = (1..roof.len() - 1)
-        .map(|t| ((roof[t + 1] - 2.0 * roof[t] + roof[t - 1]) / 1e-4 - roof_acceleration[t]).abs())
-        .fold(0.0, f64::max);
-    assert!(peak > 0.01 && worst < 1e-2 * peak, "worst difference {worst} against a peak of {peak} m/s²");
-    for d in 0..model.dampers() {
-        let force = model.damper_force_peak(d, &motion);
-        assert!(force.is_finite() && force > 0.0, "damper {d}: {force}");
-    }
-}
-
-/// The reference's peaks by response: a reduced-order run's roof displacement is its own peak and
-/// a stroke is cos θ times its storey's drift; a full-order run gives its floors' displacements
-/// and drifts from its histories, and refuses an acceleration naming the response.
+/// The reference's peaks by response, reduced and full order: the roof displacement is the run's
+/// own peak, a stroke is cos θ times its storey's drift, forces and accelerations are positive, a
+/// damper group's envelope is the largest of its dampers'.
 #[test]
 fn reference_runs_report_their_responses() {
     use windmeta::analysis::{Response, reference_peak};
@@ -268,9 +281,13 @@ fn reference_runs_report_their_responses() {
         let cos = problem.structure.dampers[11].cos_angle;
         assert!(drift > 0.0 && (stroke - cos * drift).abs() <= 1e-12 * stroke, "{order:?}: {stroke} vs {cos}·{drift}");
         let force = reference_peak(&problem, &x, &run, Response::DamperForce { floor: 12 }).unwrap();
-        assert!(force > 0.0, "{order:?}");
+        let acceleration = reference_peak(&problem, &x, &run, Response::Acceleration { floor: 40 }).unwrap();
+        assert!(force > 0.0 && acceleration > 0.0, "{order:?}: {force} N, {acceleration} m/s²");
+        // The second group's envelope: the largest of its dampers' (storeys 11-20).
+        let envelope = reference_peak(&problem, &x, &run, Response::GroupDamperForce { group: 2 }).unwrap();
+        let largest = (11..=20)
+            .map(|floor| reference_peak(&problem, &x, &run, Response::DamperForce { floor }).unwrap())
+            .fold(0.0, f64::max);
+        assert!(envelope == largest && envelope >= force, "{order:?}: {envelope} vs {largest}");
     }
-    let full = problem.reference_run(&x, Order::Full, WindPath::Field, &mut rng_from_seed(5)).unwrap();
-    let error = reference_peak(&problem, &x, &full, Response::Acceleration { floor: 3 }).unwrap_err();
-    assert!(error.to_string().starts_with("response"), "{error}");
 }

@@ -11,7 +11,7 @@ use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
 use std::sync::OnceLock;
-use windmeta::analysis::{Response, ResponseView, exceedance_curve, metamodel_peaks, validate};
+use windmeta::analysis::{Response, ResponseKind, ResponseView, exceedance_curve, metamodel_peaks, validate};
 use windmeta::dynamics::{ModalMotion, SampleModel};
 use windmeta::problem::{Problem, WindPath};
 use windmeta::surrogate::{CalibrationOptions, Metamodel, Parametrization, Silent, WindCoverage, calibrate};
@@ -54,7 +54,7 @@ fn validation_on_fresh_samples_meets_the_targets() {
     assert_eq!(report.reference_peak.len(), 16);
     assert!(report.max_exceedance_gap <= 0.25, "gap {}", report.max_exceedance_gap);
     // Every checked response, the equations-of-motion ones included (full-size targets: 0.97, 5 %).
-    let kinds: Vec<&str> = report.responses.iter().map(|r| r.response.as_str()).collect();
+    let kinds: Vec<&str> = report.responses.iter().map(|r| r.response.name()).collect();
     assert_eq!(kinds, ["displacement", "drift", "acceleration", "damper_force"]);
     for r in &report.responses {
         assert!(r.peak_correlation > 0.95 && r.median_peak_relative_error < 0.1, "{r:?}");
@@ -273,8 +273,9 @@ fn a_covering_calibration_is_calibrated_and_valid_at_its_upper_end() {
 
 /// Every response can be sampled: the stroke of a damper is cos θ times the drift of its storey,
 /// peak for peak; accelerations and damper forces (through the equations of motion) are positive
-/// and grow with the wind; a damper response where there is no damper, or a floor beyond the roof,
-/// is refused naming the floor.
+/// and grow with the wind; a group's envelope is the largest of its dampers'; a damper response
+/// where there is no damper, a group that does not exist, or a floor beyond the roof, is refused
+/// naming the floor or the group.
 #[test]
 fn every_response_is_sampled() {
     let (metamodel, problem) = calibrated();
@@ -294,9 +295,23 @@ fn every_response_is_sampled() {
         assert!(light.iter().all(|p| p.is_finite() && *p > 0.0), "{response:?}: {light:?}");
         assert!(mean(&strong) > mean(&light), "{response:?}: {light:?} then {strong:?}");
     }
+    // A group's envelope is, storm by storm, the largest peak among its ten dampers (storeys
+    // 11-20 form the second group), to rounding (one damper alone is formed inside the free run).
+    for kind in [ResponseKind::DamperForce, ResponseKind::DamperStroke] {
+        let members: Vec<Vec<f64>> = (11..=20).map(|floor| peaks(kind.at_floor(floor), 30.0)).collect();
+        let envelope = peaks(kind.of_group(2).unwrap(), 30.0);
+        for (k, e) in envelope.iter().enumerate() {
+            let largest = members.iter().map(|m| m[k]).fold(0.0, f64::max);
+            assert!((e - largest).abs() <= 1e-12 * largest, "{kind:?} of group 2, storm {k}: {e} vs {largest}");
+        }
+    }
     let mut bare = problem.clone();
     bare.structure.dampers.clear();
     let error = Response::DamperForce { floor: 3 }.check(&bare.structure).unwrap_err().to_string();
     assert!(error.contains("floor") && error.contains("no damper"), "{error}");
+    let error = Response::GroupDamperForce { group: 1 }.check(&bare.structure).unwrap_err().to_string();
+    assert!(error.starts_with("group") && error.contains("no dampers"), "{error}");
+    let error = Response::GroupDamperForce { group: 5 }.check(&problem.structure).unwrap_err().to_string();
+    assert!(error.starts_with("group") && error.contains("between 1 and 4"), "{error}");
     assert!(Response::Acceleration { floor: 41 }.check(&problem.structure).is_err());
 }

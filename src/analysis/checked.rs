@@ -5,7 +5,7 @@
 //! over the reference samples, so that both models are compared on the same named response.
 
 use super::exceedance::max_exceedance_gap;
-use super::response::{Response, ResponseView};
+use super::response::{Response, ResponseKind, ResponseView};
 use super::{pearson, quantile};
 use crate::error::Result;
 use serde::{Deserialize, Serialize};
@@ -52,7 +52,7 @@ impl CheckedPeaks {
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ResponseValidation {
     /// `displacement`, `drift`, `acceleration` or `damper_force`.
-    pub response: String,
+    pub response: ResponseKind,
     pub floor: usize,
     /// Unit of the peaks: m, m/s² or N.
     pub unit: String,
@@ -65,13 +65,13 @@ pub struct ResponseValidation {
 }
 
 impl ResponseValidation {
-    fn of(response: Response, reference: &[f64], metamodel: &[f64]) -> ResponseValidation {
+    fn of(kind: ResponseKind, floor: usize, reference: &[f64], metamodel: &[f64]) -> ResponseValidation {
         let mut errors: Vec<f64> = reference.iter().zip(metamodel).map(|(r, m)| (m - r).abs() / r.abs()).collect();
         errors.sort_by(f64::total_cmp);
         ResponseValidation {
-            response: response.kind().into(),
-            floor: response.floor(),
-            unit: response.unit().into(),
+            response: kind,
+            floor,
+            unit: kind.at_floor(floor).unit().into(),
             mean_reference_peak: reference.iter().sum::<f64>() / reference.len() as f64,
             peak_correlation: pearson(reference, metamodel),
             median_peak_relative_error: quantile(&errors, 0.5),
@@ -92,16 +92,16 @@ pub fn compare(reference: &[CheckedPeaks], metamodel: &[CheckedPeaks]) -> Vec<Re
         (0..count).max_by(|&a, &b| total(&|p| pick(p, a)).total_cmp(&total(&|p| pick(p, b))))
     };
     let mut out = Vec::new();
-    let mut add = |response: Response, pick: &dyn Fn(&CheckedPeaks) -> f64| {
-        out.push(ResponseValidation::of(response, &column(reference, pick), &column(metamodel, pick)));
+    let mut add = |kind: ResponseKind, floor: usize, pick: &dyn Fn(&CheckedPeaks) -> f64| {
+        out.push(ResponseValidation::of(kind, floor, &column(reference, pick), &column(metamodel, pick)));
     };
-    add(Response::Displacement { floor: floors }, &|p| p.roof_displacement);
+    add(ResponseKind::Displacement, floors, &|p| p.roof_displacement);
     if let Some(i) = largest(floors, &|p, i| p.drifts[i]) {
-        add(Response::Drift { floor: i + 1 }, &|p| p.drifts[i]);
+        add(ResponseKind::Drift, i + 1, &|p| p.drifts[i]);
     }
-    add(Response::Acceleration { floor: floors }, &|p| p.roof_acceleration);
+    add(ResponseKind::Acceleration, floors, &|p| p.roof_acceleration);
     if let Some(i) = largest(first.damper_forces.len(), &|p, i| p.damper_forces[i].1) {
-        add(Response::DamperForce { floor: first.damper_forces[i].0 }, &|p| p.damper_forces[i].1);
+        add(ResponseKind::DamperForce, first.damper_forces[i].0, &|p| p.damper_forces[i].1);
     }
     out
 }

@@ -167,11 +167,36 @@ pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observ
     Ok(peak_sets_at(metamodel, draws, &[response], observer)?.into_iter().map(|peaks| peaks[0]).collect())
 }
 
-/// Peaks of each of `responses` for every row of `draws` (`[row][response]`), in parallel by
+/// Peaks of each of `responses` for every row of `draws` (`[row][response]`). A damper group's
+/// envelope is the largest peak of its dampers, all run together.
+pub fn peak_sets_at(
+    metamodel: &Metamodel,
+    draws: &Draws,
+    responses: &[Response],
+    observer: &dyn Observer,
+) -> Result<Vec<Vec<f64>>> {
+    let members: Vec<Vec<Response>> =
+        responses.iter().map(|r| r.members(&draws.problem.structure)).collect::<Result<_>>()?;
+    let sets = floor_peak_sets_at(metamodel, draws, &members.concat(), observer)?;
+    let largest_of_members = |row: Vec<f64>| -> Vec<f64> {
+        let mut rest = &row[..];
+        members
+            .iter()
+            .map(|m| {
+                let (these, after) = rest.split_at(m.len());
+                rest = after;
+                these.iter().fold(0.0, |a: f64, &b| a.max(b))
+            })
+            .collect()
+    };
+    Ok(sets.into_iter().map(largest_of_members).collect())
+}
+
+/// Peaks of each of the floor responses `responses` for every row of `draws`, in parallel by
 /// batches of [`LANES`], reporting progress and stopping when `observer` asks. One displacement,
 /// drift or stroke is a combination formed inside the free run; anything else comes from the
 /// batch's blocks ([`motion_sink`]), every response from the same runs.
-pub fn peak_sets_at(
+fn floor_peak_sets_at(
     metamodel: &Metamodel,
     draws: &Draws,
     responses: &[Response],

@@ -33,8 +33,8 @@ pub use hazard::{
 pub use peaks::{PeakSummary, pearson, quantile};
 pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validation_svg};
 pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
-pub use reference::reference_peak;
-pub use response::{RESPONSE_KINDS, Response, ResponseView, STANDARD_GRAVITY};
+pub use reference::{reference_history, reference_peak};
+pub use response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_GRAVITY};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;
 pub use validation::{ValidationReport, validate};

@@ -24,7 +24,7 @@ mod gates;
 use super::Response;
 use super::response::damper_below;
 use crate::dynamics::power;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::problem::{MAX_MODES, Problem};
 use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
 use gates::Gates;
@@ -58,7 +58,9 @@ pub fn motion_sink(
                     Target::DamperForce { damper: damper_below(&problem.structure, floor)? }
                 }
                 _ => {
-                    let weights = response.modal_weights(shapes, &problem.structure)?.expect("a combination");
+                    let weights = response.modal_weights(shapes, &problem.structure)?.ok_or_else(|| {
+                        Error::Internal(format!("the {} is not one floor's combination", response.describe()))
+                    })?;
                     let mut offsets = [0.0; LANES];
                     for (w, level) in weights.iter().zip(&scales.levels) {
                         (0..LANES).for_each(|l| offsets[l] = w.mul_add(level[l], offsets[l]));

@@ -4,7 +4,7 @@
 
 use super::exceedance::{Draws, OnDivergence, check_confidence, check_samples, peak_sets_at};
 use super::peaks::quantile;
-use super::{RESPONSE_KINDS, Response};
+use super::{Response, ResponseKind};
 use crate::error::{Error, Result};
 use crate::problem::Problem;
 use crate::surrogate::{Metamodel, Observer};
@@ -16,9 +16,9 @@ use statrs::distribution::{Binomial, DiscreteCDF};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct PeakProfile {
-    /// The response's kind (one of `displacement`, `drift`, `acceleration`, `damper_force`,
-    /// `damper_stroke`) and unit.
-    pub response: String,
+    /// The response's kind.
+    pub response: ResponseKind,
+    /// Its unit: m, m/s² or N.
     pub unit: String,
     /// The floors, bottom up (for damper responses, the floors above a damper).
     pub floors: Vec<usize>,
@@ -45,15 +45,12 @@ pub struct ProfileSamples {
 }
 
 /// The responses of kind `kind` at every floor where the building has one, bottom up.
-pub fn profile_responses(kind: &str, problem: &Problem) -> Result<Vec<Response>> {
+pub fn profile_responses(kind: ResponseKind, problem: &Problem) -> Result<Vec<Response>> {
     let floors = problem.structure.floors();
-    let all: Vec<Response> = (1..=floors).map(|floor| Response::of_kind(kind, floor)).collect::<Result<_>>()?;
-    let present: Vec<Response> = all.into_iter().filter(|r| r.check(&problem.structure).is_ok()).collect();
+    let present: Vec<Response> =
+        (1..=floors).map(|floor| kind.at_floor(floor)).filter(|r| r.check(&problem.structure).is_ok()).collect();
     if present.is_empty() {
-        return Err(Error::invalid(
-            "response",
-            format!("the structure has no floor with a {kind} (the responses are {})", RESPONSE_KINDS.join(", ")),
-        ));
+        return Err(Error::invalid("response", format!("the structure has no floor with a {}", kind.name())));
     }
     Ok(present)
 }
@@ -67,7 +64,7 @@ pub fn metamodel_profiles(
     inputs: &InputModel,
     samples: usize,
     seed: u64,
-    kind: &str,
+    kind: ResponseKind,
     observer: &dyn Observer,
 ) -> Result<ProfileSamples> {
     check_samples(samples)?;
@@ -97,9 +94,9 @@ impl ProfileSamples {
         let n = self.peaks.len();
         let (r, s) = order_statistics(n, p, confidence)?;
         let mut profile = PeakProfile {
-            response: self.responses[0].kind().to_string(),
+            response: self.responses[0].kind(),
             unit: self.responses[0].unit().to_string(),
-            floors: self.responses.iter().map(Response::floor).collect(),
+            floors: self.responses.iter().filter_map(Response::floor).collect(),
             quantile: p,
             values: Vec::new(),
             lower: Vec::new(),

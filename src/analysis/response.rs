@@ -12,10 +12,11 @@ use std::cell::OnceCell;
 /// Standard gravity (m/s²), for accelerations in milli-g.
 pub const STANDARD_GRAVITY: f64 = 9.806_65;
 
-/// A response history of the building.
+/// A response history of the building: of one floor, or for the dampers the envelope of a
+/// coefficient group (at every instant the largest magnitude among its dampers, so its peak is the
+/// largest of their peaks: what devices made alike are designed for).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
-#[serde(tag = "kind", rename_all = "snake_case")]
+#[serde(into = "ResponseName", try_from = "ResponseName")]
 pub enum Response {
     /// Displacement of a floor (1-based; the roof is the top floor), m.
     Displacement { floor: usize },
@@ -27,54 +28,176 @@ pub enum Response {
     DamperForce { floor: usize },
     /// Axial elongation of that damper's brace from the unloaded frame, cos θ·(u_floor − u_{floor−1}), m.
     DamperStroke { floor: usize },
+    /// The largest axial force among the dampers of a group (1-based), N.
+    GroupDamperForce { group: usize },
+    /// The largest brace elongation among the dampers of a group (1-based), m.
+    GroupDamperStroke { group: usize },
 }
 
-/// A response's kind, as requests name it.
-pub const RESPONSE_KINDS: [&str; 5] = ["displacement", "drift", "acceleration", "damper_force", "damper_stroke"];
+/// A response's kind, as requests and answers name it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum ResponseKind {
+    /// Floor displacement (m).
+    #[default]
+    Displacement,
+    /// Inter-storey drift below the floor (m).
+    Drift,
+    /// Floor acceleration (m/s²), from the equations of motion of the reduced model.
+    Acceleration,
+    /// Axial force of the damper in the storey below the floor, or the largest of a group's (N).
+    DamperForce,
+    /// Axial elongation of that damper's brace, or the largest of a group's (m).
+    DamperStroke,
+}
 
-impl Response {
-    /// The response of kind `kind` (one of [`RESPONSE_KINDS`]) at `floor`.
-    pub fn of_kind(kind: &str, floor: usize) -> Result<Response> {
-        Ok(match kind {
-            "displacement" => Response::Displacement { floor },
-            "drift" => Response::Drift { floor },
-            "acceleration" => Response::Acceleration { floor },
-            "damper_force" => Response::DamperForce { floor },
-            "damper_stroke" => Response::DamperStroke { floor },
-            other => {
-                return Err(Error::invalid(
-                    "response",
-                    format!("unknown response `{other}`; the responses are {}", RESPONSE_KINDS.join(", ")),
-                ));
-            }
+impl ResponseKind {
+    /// Every kind, in the order tables list them.
+    pub const ALL: [ResponseKind; 5] = [
+        ResponseKind::Displacement,
+        ResponseKind::Drift,
+        ResponseKind::Acceleration,
+        ResponseKind::DamperForce,
+        ResponseKind::DamperStroke,
+    ];
+
+    /// The name requests and answers use.
+    pub fn name(self) -> &'static str {
+        match self {
+            ResponseKind::Displacement => "displacement",
+            ResponseKind::Drift => "drift",
+            ResponseKind::Acceleration => "acceleration",
+            ResponseKind::DamperForce => "damper_force",
+            ResponseKind::DamperStroke => "damper_stroke",
+        }
+    }
+
+    /// The kind named `name`.
+    pub fn parse(name: &str) -> Result<ResponseKind> {
+        ResponseKind::ALL.into_iter().find(|kind| kind.name() == name).ok_or_else(|| {
+            let names: Vec<&str> = ResponseKind::ALL.iter().map(|k| k.name()).collect();
+            Error::invalid("response", format!("unknown response `{name}`; the responses are {}", names.join(", ")))
         })
     }
 
-    pub fn floor(&self) -> usize {
+    /// The response of this kind at `floor`.
+    pub fn at_floor(self, floor: usize) -> Response {
+        match self {
+            ResponseKind::Displacement => Response::Displacement { floor },
+            ResponseKind::Drift => Response::Drift { floor },
+            ResponseKind::Acceleration => Response::Acceleration { floor },
+            ResponseKind::DamperForce => Response::DamperForce { floor },
+            ResponseKind::DamperStroke => Response::DamperStroke { floor },
+        }
+    }
+
+    /// The envelope of this kind over the dampers of `group` (1-based): damper responses only.
+    pub fn of_group(self, group: usize) -> Result<Response> {
+        match self {
+            ResponseKind::DamperForce => Ok(Response::GroupDamperForce { group }),
+            ResponseKind::DamperStroke => Ok(Response::GroupDamperStroke { group }),
+            _ => Err(Error::invalid("group", "only damper_force and damper_stroke are taken over a damper group")),
+        }
+    }
+
+    /// The response a request names: at `floor` (the roof when absent) or over a damper `group`,
+    /// checked against `structure`.
+    pub fn located(self, floor: Option<usize>, group: Option<usize>, structure: &Structure) -> Result<Response> {
+        let response = match (floor, group) {
+            (Some(_), Some(_)) => return Err(Error::invalid("group", "give a floor or a damper group, not both")),
+            (_, Some(group)) => self.of_group(group)?,
+            (floor, None) => self.at_floor(floor.unwrap_or(structure.floors())),
+        };
+        response.check(structure)?;
+        Ok(response)
+    }
+}
+
+/// How requests and answers write a response: its kind at a floor, or over a damper group.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(deny_unknown_fields)]
+pub struct ResponseName {
+    pub kind: ResponseKind,
+    /// Floor (1-based); absent for a damper group's envelope.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub floor: Option<usize>,
+    /// Damper group (1-based) whose largest response this is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub group: Option<usize>,
+}
+
+impl From<Response> for ResponseName {
+    fn from(response: Response) -> ResponseName {
+        let (floor, group) = match response {
+            Response::GroupDamperForce { group } | Response::GroupDamperStroke { group } => (None, Some(group)),
+            other => (other.floor(), None),
+        };
+        ResponseName { kind: response.kind(), floor, group }
+    }
+}
+
+impl TryFrom<ResponseName> for Response {
+    type Error = String;
+
+    fn try_from(name: ResponseName) -> std::result::Result<Response, String> {
+        match (name.floor, name.group) {
+            (Some(floor), None) => Ok(name.kind.at_floor(floor)),
+            (None, Some(group)) => name.kind.of_group(group).map_err(|e| e.to_string()),
+            _ => Err("a response names exactly one of `floor` and `group`".into()),
+        }
+    }
+}
+
+impl Response {
+    /// The response of the kind named `kind` at `floor`.
+    pub fn of_kind(kind: &str, floor: usize) -> Result<Response> {
+        Ok(ResponseKind::parse(kind)?.at_floor(floor))
+    }
+
+    /// The floor of a floor's response; `None` for a group's envelope.
+    pub fn floor(&self) -> Option<usize> {
         match *self {
             Response::Displacement { floor }
             | Response::Drift { floor }
             | Response::Acceleration { floor }
             | Response::DamperForce { floor }
-            | Response::DamperStroke { floor } => floor,
+            | Response::DamperStroke { floor } => Some(floor),
+            Response::GroupDamperForce { .. } | Response::GroupDamperStroke { .. } => None,
         }
     }
 
-    pub fn kind(&self) -> &'static str {
+    pub fn kind(&self) -> ResponseKind {
         match self {
-            Response::Displacement { .. } => "displacement",
-            Response::Drift { .. } => "drift",
-            Response::Acceleration { .. } => "acceleration",
-            Response::DamperForce { .. } => "damper_force",
-            Response::DamperStroke { .. } => "damper_stroke",
+            Response::Displacement { .. } => ResponseKind::Displacement,
+            Response::Drift { .. } => ResponseKind::Drift,
+            Response::Acceleration { .. } => ResponseKind::Acceleration,
+            Response::DamperForce { .. } | Response::GroupDamperForce { .. } => ResponseKind::DamperForce,
+            Response::DamperStroke { .. } | Response::GroupDamperStroke { .. } => ResponseKind::DamperStroke,
         }
+    }
+
+    /// The floor responses whose largest peak this is: the group's dampers for an envelope, the
+    /// response itself otherwise.
+    pub fn members(&self, structure: &Structure) -> Result<Vec<Response>> {
+        self.check(structure)?;
+        let below =
+            |group: usize| structure.dampers.iter().filter(move |d| d.group + 1 == group).map(|d| d.upper_floor + 1);
+        Ok(match *self {
+            Response::GroupDamperForce { group } => below(group).map(|floor| Response::DamperForce { floor }).collect(),
+            Response::GroupDamperStroke { group } => {
+                below(group).map(|floor| Response::DamperStroke { floor }).collect()
+            }
+            other => vec![other],
+        })
     }
 
     /// The SI unit of the response's values.
     pub fn unit(&self) -> &'static str {
         match self {
             Response::Acceleration { .. } => "m/s²",
-            Response::DamperForce { .. } => "N",
+            Response::DamperForce { .. } | Response::GroupDamperForce { .. } => "N",
             _ => "m",
         }
     }
@@ -83,7 +206,7 @@ impl Response {
     pub fn unit_tag(&self) -> &'static str {
         match self {
             Response::Acceleration { .. } => "m_s2",
-            Response::DamperForce { .. } => "n",
+            Response::DamperForce { .. } | Response::GroupDamperForce { .. } => "n",
             _ => "m",
         }
     }
@@ -96,12 +219,30 @@ impl Response {
             Response::Acceleration { floor } => format!("acceleration of floor {floor}"),
             Response::DamperForce { floor } => format!("force of the damper below floor {floor}"),
             Response::DamperStroke { floor } => format!("stroke of the damper below floor {floor}"),
+            Response::GroupDamperForce { group } => format!("largest force among the dampers of group {group}"),
+            Response::GroupDamperStroke { group } => format!("largest stroke among the dampers of group {group}"),
         }
     }
 
-    /// Checks the floor, and for a damper response that the storey has a damper.
+    /// Checks the floor, for a damper response that the storey has a damper, for a group's
+    /// envelope that the group exists.
     pub fn check(&self, structure: &Structure) -> Result<()> {
-        let (floor, floors) = (self.floor(), structure.floors());
+        let Some(floor) = self.floor() else {
+            let (Response::GroupDamperForce { group } | Response::GroupDamperStroke { group }) = *self else {
+                unreachable!("every other response is a floor's")
+            };
+            let groups = structure.damper_groups();
+            if group == 0 || group > groups {
+                let range = if groups == 0 {
+                    "the structure has no dampers".to_string()
+                } else {
+                    format!("must be between 1 and {groups}")
+                };
+                return Err(Error::invalid("group", format!("{range}, got {group}")));
+            }
+            return Ok(());
+        };
+        let floors = structure.floors();
         if floor == 0 || floor > floors {
             return Err(Error::invalid("floor", format!("must be between 1 and {floors}, got {floor}")));
         }
@@ -130,11 +271,12 @@ impl Response {
                 let cos = structure.dampers[damper_below(structure, floor)?].cos_angle;
                 Some(storey(floor).iter().map(|w| cos * w).collect())
             }
-            Response::Acceleration { .. } | Response::DamperForce { .. } => None,
+            _ => None,
         })
     }
 
-    /// The response's history in a sample's motion.
+    /// The response's history in a sample's motion; a group's envelope is, step by step, the
+    /// largest magnitude among its dampers.
     pub fn history(&self, view: &ResponseView) -> Result<Vec<f64>> {
         let combine = |modal: &[Vec<f64>], weights: &[f64]| -> Vec<f64> {
             let steps = modal.first().map_or(0, Vec::len);
@@ -151,18 +293,36 @@ impl Response {
             Response::DamperForce { floor } => {
                 view.model.damper_force(damper_below(view.structure, floor)?, view.motion)
             }
-            _ => unreachable!("the linear responses returned above"),
+            group => envelope(group.members(view.structure)?.iter().map(|m| m.history(view)))?,
         })
     }
 
     /// Peak absolute value over the storm.
     pub fn peak(&self, view: &ResponseView) -> Result<f64> {
-        if let Response::DamperForce { floor } = *self {
-            self.check(view.structure)?;
-            return Ok(view.model.damper_force_peak(damper_below(view.structure, floor)?, view.motion));
+        match *self {
+            Response::DamperForce { floor } => {
+                self.check(view.structure)?;
+                Ok(view.model.damper_force_peak(damper_below(view.structure, floor)?, view.motion))
+            }
+            Response::GroupDamperForce { .. } | Response::GroupDamperStroke { .. } => {
+                self.members(view.structure)?.iter().try_fold(0.0, |m: f64, r| Ok(m.max(r.peak(view)?)))
+            }
+            _ => Ok(self.history(view)?.iter().fold(0.0, |m, v| m.max(v.abs()))),
         }
-        Ok(self.history(view)?.iter().fold(0.0, |m, v| m.max(v.abs())))
     }
+}
+
+/// Step by step the largest magnitude among `histories`.
+pub(super) fn envelope(histories: impl Iterator<Item = Result<Vec<f64>>>) -> Result<Vec<f64>> {
+    let mut largest: Vec<f64> = Vec::new();
+    for history in histories {
+        let history = history?;
+        largest.resize(history.len(), 0.0);
+        for (l, v) in largest.iter_mut().zip(history) {
+            *l = l.max(v.abs());
+        }
+    }
+    Ok(largest)
 }
 
 /// The index of the damper in the storey below `floor` (1-based).
@@ -198,5 +358,50 @@ impl<'a> ResponseView<'a> {
 
     fn modal_accelerations(&self) -> &[Vec<f64>] {
         self.accelerations.get_or_init(|| self.model.modal_accelerations(self.motion, self.forces))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::structure::frame40;
+    use serde_json::json;
+
+    /// Answers write a floor's response and a group's envelope under the same kind names, and read
+    /// back what they wrote; a name with both or neither location is refused.
+    #[test]
+    fn responses_are_named_by_kind_and_location() {
+        for (response, written) in [
+            (Response::Drift { floor: 12 }, json!({"kind": "drift", "floor": 12})),
+            (Response::GroupDamperForce { group: 3 }, json!({"kind": "damper_force", "group": 3})),
+            (Response::DamperStroke { floor: 7 }, json!({"kind": "damper_stroke", "floor": 7})),
+        ] {
+            assert_eq!(serde_json::to_value(response).unwrap(), written);
+            assert_eq!(serde_json::from_value::<Response>(written).unwrap(), response);
+        }
+        for wrong in [
+            json!({"kind": "drift", "floor": 1, "group": 1}),
+            json!({"kind": "drift"}),
+            json!({"kind": "acceleration", "group": 1}),
+        ] {
+            assert!(serde_json::from_value::<Response>(wrong.clone()).is_err(), "{wrong}");
+        }
+    }
+
+    /// A request's kind, floor and group resolve to the roof by default, and every wrong
+    /// combination is refused naming the field.
+    #[test]
+    fn requests_locate_their_response() {
+        let structure = frame40().unwrap();
+        let at = |kind: &str, floor, group| ResponseKind::parse(kind).and_then(|k| k.located(floor, group, &structure));
+        assert_eq!(at("acceleration", None, None).unwrap(), Response::Acceleration { floor: 40 });
+        assert_eq!(at("damper_stroke", None, Some(4)).unwrap(), Response::GroupDamperStroke { group: 4 });
+        let field = |result: Result<Response>| result.unwrap_err().to_string().split(':').next().unwrap().to_string();
+        assert_eq!(field(at("velocity", None, None)), "response");
+        assert_eq!(field(at("drift", None, Some(1))), "group");
+        assert_eq!(field(at("damper_force", Some(3), Some(1))), "group");
+        assert_eq!(field(at("damper_force", None, Some(5))), "group");
+        assert_eq!(field(at("displacement", Some(41), None)), "floor");
+        assert_eq!(Response::GroupDamperForce { group: 1 }.members(&structure).unwrap().len(), 10);
     }
 }

@@ -1,6 +1,6 @@
 //! Arguments shared by the commands: the study, the response, the output file.
 
-use crate::analysis::Response;
+use crate::analysis::{Response, ResponseKind};
 use crate::error::{Error, Result};
 use crate::problem::{Problem, ProblemSpec};
 use crate::uncertainty::{InputModel, parse_assignment};
@@ -96,8 +96,12 @@ pub struct ResponseArgs {
     /// Floor of the response (default: the roof).
     #[arg(long)]
     pub floor: Option<usize>,
+    /// For damper_force and damper_stroke: the largest among the dampers of this coefficient
+    /// group (1-based) instead of one floor's damper.
+    #[arg(long, conflicts_with = "floor")]
+    pub group: Option<usize>,
     /// The response: displacement, drift, acceleration, damper_force or damper_stroke (the
-    /// damper in the storey below the floor).
+    /// damper in the storey below the floor, or a group's with --group).
     #[arg(long, default_value = "displacement", conflicts_with = "drift")]
     pub response: String,
     /// The inter-storey drift below the floor (the same as --response drift).
@@ -107,11 +111,9 @@ pub struct ResponseArgs {
 
 impl ResponseArgs {
     pub fn response(&self, problem: &Problem) -> Result<Response> {
-        let floor = self.floor.unwrap_or(problem.structure.floors());
-        let kind = if self.drift { "drift".to_string() } else { self.response.replace('-', "_") };
-        let response = Response::of_kind(&kind, floor)?;
-        response.check(&problem.structure)?;
-        Ok(response)
+        let kind =
+            if self.drift { ResponseKind::Drift } else { ResponseKind::parse(&self.response.replace('-', "_"))? };
+        kind.located(self.floor, self.group, &problem.structure)
     }
 }
 

@@ -5,8 +5,8 @@
 //! ten return levels and Sobol indices end to end. Speed is measured here and in `benches/`, never asserted in a test.
 
 use crate::analysis::{
-    HazardOptions, Response, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve, metamodel_hazard,
-    metamodel_peaks, metamodel_profiles, metamodel_sensitivity,
+    HazardOptions, Response, ResponseKind, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve,
+    metamodel_hazard, metamodel_peaks, metamodel_profiles, metamodel_sensitivity,
 };
 use crate::cancel::Never;
 use crate::dynamics::{integrate_full, integrate_reduced};
@@ -133,7 +133,15 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         repetitions.min(3),
     ));
     let profile = time(repetitions.min(3), |r| {
-        let samples = metamodel_profiles(&metamodel, &problem, &problem.inputs, args.samples, 1 + r, "drift", &Silent)?;
+        let samples = metamodel_profiles(
+            &metamodel,
+            &problem,
+            &problem.inputs,
+            args.samples,
+            1 + r,
+            ResponseKind::Drift,
+            &Silent,
+        )?;
         samples.quantile_profile(0.5, 0.95)
     })?;
     rows.push(row(

@@ -4,7 +4,7 @@
 use super::args::{AnalysisArgs, SamplingArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
-use crate::analysis::{PeakProfile, check_confidence, check_quantile, metamodel_profiles, profile_svg};
+use crate::analysis::{PeakProfile, ResponseKind, check_confidence, check_quantile, metamodel_profiles, profile_svg};
 use crate::error::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -45,14 +45,14 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, problem) = read_metamodel(&args.sampling.model)?;
     let inputs = args.sampling.held_inputs(&problem.inputs)?;
-    let kind = args.response.replace('-', "_");
+    let kind = ResponseKind::parse(&args.response.replace('-', "_"))?;
     let started = Instant::now();
     let seed = args.analysis.seed;
     let samples =
-        metamodel_profiles(&metamodel, &problem, &inputs, args.sampling.samples, seed, &kind, &Counter(started))?;
+        metamodel_profiles(&metamodel, &problem, &inputs, args.sampling.samples, seed, kind, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let profile = samples.quantile_profile(args.quantile, args.analysis.confidence)?;
-    let label = format!("peak {} ({})", kind.replace('_', " "), profile.unit);
+    let label = format!("peak {} ({})", kind.name().replace('_', " "), profile.unit);
     let out = args.out.as_deref().zip(format);
     answer(
         &profile,

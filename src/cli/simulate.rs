@@ -1,13 +1,13 @@
 //! `windmeta simulate`: one storm through the reference model.
 
 use super::ProblemArgs;
-use crate::analysis::{RESPONSE_KINDS, Response, STANDARD_GRAVITY, profile_responses, reference_peak};
+use crate::analysis::{Response, ResponseKind, STANDARD_GRAVITY, profile_responses, reference_history, reference_peak};
 use crate::error::{Error, Result};
-use crate::problem::{Order, WindPath};
+use crate::problem::{Order, Problem, WindPath};
 use crate::uncertainty::rng_from_seed;
 use clap::{Args, ValueEnum};
 use serde_json::json;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 #[derive(Debug, Clone, Copy, ValueEnum)]
@@ -31,9 +31,18 @@ pub struct SimulateArgs {
     /// Wind path of a reduced-order run.
     #[arg(long, value_enum, default_value = "modal")]
     pub wind: WindChoice,
-    /// Write the roof displacement history (CSV: t_s, roof_m).
+    /// Write response histories (CSV: t_s, then a column per response such as
+    /// acceleration_40_m_s2); the roof displacement unless --history or --history-floors say otherwise.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// A response whose history --out writes: displacement, drift, acceleration, damper_force or
+    /// damper_stroke (repeatable).
+    #[arg(long = "history", value_name = "KIND")]
+    pub histories: Vec<String>,
+    /// The floors of those histories: `all` (every floor where the response exists) or a list
+    /// such as 1,20,40; the roof when absent.
+    #[arg(long, value_name = "all|F1,F2,...")]
+    pub history_floors: Option<String>,
     #[arg(long)]
     pub json: bool,
 }
@@ -57,23 +66,15 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
         .enumerate()
         .fold((0, 0.0f64), |(bi, b), (i, v)| if v.abs() > b { (i, v.abs()) } else { (bi, b) });
     if let Some(path) = &args.out {
-        let mut writer =
-            csv::Writer::from_path(path).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
-        writer.write_record(["t_s", "roof_m"]).map_err(|e| Error::invalid("out", e.to_string()))?;
-        for (i, u) in run.roof.iter().enumerate() {
-            writer
-                .write_record([format!("{:.4}", i as f64 * dt), format!("{u:.9e}")])
-                .map_err(|e| Error::invalid("out", e.to_string()))?;
-        }
-        writer.flush().map_err(|e| Error::invalid("out", e.to_string()))?;
+        let responses = history_responses(args, &problem)?;
+        let histories =
+            responses.iter().map(|&r| reference_history(&problem, &x, &run, r)).collect::<Result<Vec<Vec<f64>>>>()?;
+        write_histories(path, &responses, &histories, dt)?;
     }
-    // Every response at every floor where it exists (a full-order run has no accelerations).
+    // Every response at every floor where it exists.
     let mut peaks = serde_json::Map::new();
     let mut largest = Vec::new();
-    for kind in RESPONSE_KINDS {
-        if kind == "acceleration" && args.full_order {
-            continue;
-        }
+    for kind in ResponseKind::ALL {
         let responses = profile_responses(kind, &problem)?;
         let values = responses.iter().map(|&r| reference_peak(&problem, &x, &run, r)).collect::<Result<Vec<f64>>>()?;
         let (at, most) = responses
@@ -81,8 +82,8 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
             .zip(&values)
             .fold((responses[0], 0.0), |best, (r, v)| if *v > best.1 { (*r, *v) } else { best });
         largest.push((at, most));
-        let floors: Vec<usize> = responses.iter().map(Response::floor).collect();
-        peaks.insert(kind.to_string(), json!({"unit": responses[0].unit(), "floors": floors, "peaks": values}));
+        let floors: Vec<usize> = responses.iter().filter_map(Response::floor).collect();
+        peaks.insert(kind.name().to_string(), json!({"unit": responses[0].unit(), "floors": floors, "peaks": values}));
     }
     let inputs: serde_json::Map<String, serde_json::Value> =
         problem.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
@@ -129,7 +130,54 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
         setup_seconds, run.wind_seconds, run.integration_seconds
     );
     if let Some(path) = &args.out {
-        out += &format!("roof history written to {}\n", path.display());
+        out += &format!("histories written to {}\n", path.display());
     }
     Ok(out)
+}
+
+/// The responses whose histories `--out` writes: each `--history` kind (displacement by default)
+/// at each of `--history-floors` (the roof by default; `all`: every floor where it exists).
+fn history_responses(args: &SimulateArgs, problem: &Problem) -> Result<Vec<Response>> {
+    let kinds = if args.histories.is_empty() {
+        vec![ResponseKind::Displacement]
+    } else {
+        args.histories.iter().map(|k| ResponseKind::parse(&k.replace('-', "_"))).collect::<Result<_>>()?
+    };
+    let mut responses = Vec::new();
+    for kind in kinds {
+        match args.history_floors.as_deref().map(str::trim) {
+            None => responses.push(kind.located(None, None, &problem.structure)?),
+            Some("all") => responses.extend(profile_responses(kind, problem)?),
+            Some(list) => {
+                for floor in list.split(',') {
+                    let floor = floor.trim().parse::<usize>().map_err(|_| {
+                        Error::invalid(
+                            "history-floors",
+                            format!("`{floor}` is not a floor; give `all` or floors such as 1,20,40"),
+                        )
+                    })?;
+                    responses.push(kind.located(Some(floor), None, &problem.structure)?);
+                }
+            }
+        }
+    }
+    Ok(responses)
+}
+
+/// Writes `histories` (one per response, `dt` apart) as CSV: t_s, then a column per response.
+fn write_histories(path: &Path, responses: &[Response], histories: &[Vec<f64>], dt: f64) -> Result<()> {
+    let failed = |e: csv::Error| Error::invalid("out", format!("{}: {e}", path.display()));
+    let mut writer = csv::Writer::from_path(path).map_err(failed)?;
+    let mut header = vec!["t_s".to_string()];
+    header.extend(responses.iter().map(|r| {
+        format!("{}_{}_{}", r.kind().name(), r.floor().map_or(String::new(), |f| f.to_string()), r.unit_tag())
+    }));
+    writer.write_record(&header).map_err(failed)?;
+    let steps = histories.first().map_or(0, Vec::len);
+    for t in 0..steps {
+        let mut row = vec![format!("{:.4}", t as f64 * dt)];
+        row.extend(histories.iter().map(|h| format!("{:.9e}", h[t])));
+        writer.write_record(&row).map_err(failed)?;
+    }
+    writer.flush().map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))
 }

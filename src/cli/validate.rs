@@ -77,7 +77,7 @@ pub fn validate(args: &ValidateArgs) -> Result<String> {
     for r in &report.responses {
         responses += &format!(
             "{:<14} {:>5} {:>9.4} {:<4} {:>9.4} {:>9.2} {:>9.2} {:>6.3}\n",
-            r.response,
+            r.response.name(),
             r.floor,
             r.mean_reference_peak,
             r.unit,

@@ -12,10 +12,14 @@ use crate::linalg::{cholesky, cholesky_solve, multiply_into};
 use crate::structure::{Modes, Structure};
 use crate::wind::FloorForces;
 
-/// Displacement history of every floor: `displacements[floor][step]`.
+/// The motion of every floor, `[floor][step]`: displacements (m), and Newmark's own velocities
+/// (m/s) and accelerations (m/s²), which satisfy the equations of motion at every step; no
+/// history is differenced.
 #[derive(Debug, Clone)]
 pub struct FloorResponse {
     pub displacements: Vec<Vec<f64>>,
+    pub velocities: Vec<Vec<f64>>,
+    pub accelerations: Vec<Vec<f64>>,
 }
 
 /// M, C and K of one sample, row-major.
@@ -90,14 +94,17 @@ pub fn integrate_full(
     cholesky_solve(&m_factor, n, &mut acc);
 
     let active = dampers.coefficients.iter().any(|&c| c > 0.0);
-    let mut displacements: Vec<Vec<f64>> = u
-        .iter()
-        .map(|&x| {
-            let mut series = Vec::with_capacity(steps);
-            series.push(x);
-            series
-        })
-        .collect();
+    let histories = |start: &[f64]| -> Vec<Vec<f64>> {
+        start
+            .iter()
+            .map(|&x| {
+                let mut series = Vec::with_capacity(steps);
+                series.push(x);
+                series
+            })
+            .collect()
+    };
+    let (mut displacements, mut velocities, mut accelerations) = (histories(&u), histories(&v), histories(&acc));
     let (mut rhs, mut work, mut predicted) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
     let mut s = vec![0.0; n];
     let mut correction = vec![0.0; n];
@@ -141,7 +148,9 @@ pub fn integrate_full(
                 return Err(Error::Numerical(format!("the full-order model diverged at step {i}")));
             }
             displacements[j].push(u[j]);
+            velocities[j].push(v[j]);
+            accelerations[j].push(acc[j]);
         }
     }
-    Ok(FloorResponse { displacements })
+    Ok(FloorResponse { displacements, velocities, accelerations })
 }

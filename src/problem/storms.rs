@@ -3,7 +3,7 @@
 
 use super::{PhysicalParameters, Problem};
 use crate::cancel::Never;
-use crate::dynamics::{ModalMotion, integrate_full, integrate_reduced};
+use crate::dynamics::{FloorResponse, ModalMotion, integrate_full, integrate_reduced};
 use crate::error::Result;
 use crate::uncertainty::{Rng, rng_from_seed, stream_seed};
 use crate::wind::{CoarseModalForces, ModalForces, Workspace};
@@ -39,8 +39,8 @@ pub struct StormRun {
     pub modal_forces: Option<ModalForces>,
     /// Modal displacements and the integrator's velocities of a reduced-order run.
     pub modal_motion: Option<ModalMotion>,
-    /// Floor displacement histories of a full-order run, `[floor][step]` (m).
-    pub floor_displacements: Option<Vec<Vec<f64>>>,
+    /// Every floor's motion in a full-order run.
+    pub floor_motion: Option<FloorResponse>,
     pub wind_seconds: f64,
     pub integration_seconds: f64,
 }
@@ -110,7 +110,7 @@ impl Problem {
                     roof: response.roof(),
                     modal_forces: Some(forces),
                     modal_motion: Some(response.motion()),
-                    floor_displacements: None,
+                    floor_motion: None,
                     wind_seconds,
                     integration_seconds,
                 })
@@ -128,7 +128,7 @@ impl Problem {
                     roof,
                     modal_forces: None,
                     modal_motion: None,
-                    floor_displacements: Some(response.displacements),
+                    floor_motion: Some(response),
                     wind_seconds,
                     integration_seconds,
                 })

@@ -3,12 +3,12 @@
 //! requests as operations.
 
 use super::ServeArgs;
-use super::exceedance::{Rendering, ResponseKind, response_of};
+use super::exceedance::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
-    ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions, Response, Sampling,
-    Sensitivity, WIND_SPEED, check_confidence, fragility_svg, hazard_svg, metamodel_fragility, metamodel_hazard,
-    metamodel_sensitivity,
+    ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions, Response,
+    ResponseKind, ResponseName, Sampling, Sensitivity, WIND_SPEED, check_confidence, fragility_svg, hazard_svg,
+    metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
 };
 use crate::error::{Error, Result};
 use crate::problem::Problem;
@@ -32,6 +32,11 @@ pub struct HazardRequest {
     #[schema(minimum = 1, maximum = 200)]
     #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub floor: Option<usize>,
+    /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
+    /// largest among the group's dampers.
+    #[schema(minimum = 1, maximum = 10)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    pub group: Option<usize>,
     pub response: ResponseKind,
     /// The law of the annual maximum storm speed at 10 m; the metamodel's `wind_speed` marginal
     /// when absent.
@@ -58,6 +63,7 @@ impl Default for HazardRequest {
             samples: 20_000,
             seed: 1,
             floor: None,
+            group: None,
             response: ResponseKind::Displacement,
             climate: None,
             thresholds: None,
@@ -89,6 +95,11 @@ pub struct FragilityRequest {
     #[schema(minimum = 1, maximum = 200)]
     #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub floor: Option<usize>,
+    /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
+    /// largest among the group's dampers.
+    #[schema(minimum = 1, maximum = 10)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    pub group: Option<usize>,
     pub response: ResponseKind,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
     pub confidence: f64,
@@ -122,6 +133,7 @@ impl Default for FragilityRequest {
             samples: 500,
             seed: 1,
             floor: None,
+            group: None,
             response: ResponseKind::Displacement,
             confidence: 0.95,
         }
@@ -156,6 +168,11 @@ pub struct SensitivityRequest {
     #[schema(minimum = 1, maximum = 200)]
     #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub floor: Option<usize>,
+    /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
+    /// largest among the group's dampers.
+    #[schema(minimum = 1, maximum = 10)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    pub group: Option<usize>,
     pub response: ResponseKind,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
     pub confidence: f64,
@@ -167,6 +184,7 @@ impl Default for SensitivityRequest {
             samples: 1024,
             seed: 1,
             floor: None,
+            group: None,
             response: ResponseKind::Displacement,
             confidence: 0.95,
         }
@@ -194,6 +212,7 @@ pub struct AnalysisJob {
 pub struct HazardAnswer {
     #[serde(flatten)]
     pub curve: HazardCurve,
+    #[schema(value_type = ResponseName)]
     pub response: Response,
     pub metamodel_id: String,
 }
@@ -203,6 +222,7 @@ pub struct HazardAnswer {
 pub struct FragilityAnswer {
     #[serde(flatten)]
     pub fragility: Fragility,
+    #[schema(value_type = ResponseName)]
     pub response: Response,
     pub metamodel_id: String,
 }
@@ -212,6 +232,7 @@ pub struct FragilityAnswer {
 pub struct SensitivityAnswer {
     #[serde(flatten)]
     pub sensitivity: Sensitivity,
+    #[schema(value_type = ResponseName)]
     pub response: Response,
     pub metamodel_id: String,
 }
@@ -238,6 +259,16 @@ impl AnalysisRequest {
         }
     }
 
+    /// The response the request names, checked against the study's structure.
+    fn response(&self, problem: &Problem) -> Result<Response> {
+        let (floor, group, kind) = match self {
+            AnalysisRequest::Hazard(r) => (r.floor, r.group, r.response),
+            AnalysisRequest::Fragility(r) => (r.floor, r.group, r.response),
+            AnalysisRequest::Sensitivity(r) => (r.floor, r.group, r.response),
+        };
+        kind.located(floor, group, &problem.structure)
+    }
+
     /// The checks that need the study but no sampling; errors name the field.
     pub fn check(&self, config: &ServeArgs, problem: &Problem) -> Result<()> {
         let storms = self.storms(problem);
@@ -247,12 +278,7 @@ impl AnalysisRequest {
                 format!("the request runs {storms} storms; this server allows 1 to {}", config.max_analysis_storms),
             ));
         }
-        let (floor, kind) = match self {
-            AnalysisRequest::Hazard(r) => (r.floor, r.response),
-            AnalysisRequest::Fragility(r) => (r.floor, r.response),
-            AnalysisRequest::Sensitivity(r) => (r.floor, r.response),
-        };
-        response_of(floor, kind, problem).check(&problem.structure)?;
+        self.response(problem)?;
         match self {
             AnalysisRequest::Hazard(r) => r.options(problem)?.check(),
             AnalysisRequest::Fragility(r) => r.options()?.check(),
@@ -270,20 +296,18 @@ impl AnalysisRequest {
         observer: &dyn Observer,
     ) -> Result<AnalysisAnswer> {
         let metamodel_id = metamodel_id.to_string();
+        let response = self.response(problem)?;
         Ok(match self {
             AnalysisRequest::Hazard(r) => {
-                let response = response_of(r.floor, r.response, problem);
                 let options = r.options(problem)?;
                 let curve = metamodel_hazard(metamodel, problem, response, &options, observer)?;
                 AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response, metamodel_id }))
             }
             AnalysisRequest::Fragility(r) => {
-                let response = response_of(r.floor, r.response, problem);
                 let fragility = metamodel_fragility(metamodel, problem, response, &r.options()?, observer)?;
                 AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response, metamodel_id }))
             }
             AnalysisRequest::Sensitivity(r) => {
-                let response = response_of(r.floor, r.response, problem);
                 let sensitivity =
                     metamodel_sensitivity(metamodel, problem, response, r.samples, r.seed, r.confidence, observer)?;
                 AnalysisAnswer::Sensitivity(Box::new(SensitivityAnswer { sensitivity, response, metamodel_id }))

@@ -6,8 +6,8 @@ use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
 use crate::analysis::exceedance_svg;
 use crate::analysis::{
-    PeakProfile, Response, automatic_thresholds, check_confidence, check_quantile, check_thresholds, exceedance_curve,
-    metamodel_peaks, metamodel_profiles,
+    PeakProfile, Response, ResponseKind, ResponseName, automatic_thresholds, check_confidence, check_quantile,
+    check_thresholds, exceedance_curve, metamodel_peaks, metamodel_profiles,
 };
 use crate::error::{Error, Result, require_finite};
 use crate::problem::Problem;
@@ -20,35 +20,6 @@ use std::collections::BTreeMap;
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use utoipa::ToSchema;
-
-/// Which response's peak the curve is of.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Default, ToSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum ResponseKind {
-    /// Floor displacement (m).
-    #[default]
-    Displacement,
-    /// Inter-storey drift below the floor (m).
-    Drift,
-    /// Floor acceleration (m/s²), from the equations of motion of the reduced model.
-    Acceleration,
-    /// Axial force of the damper in the storey below the floor (N).
-    DamperForce,
-    /// Axial elongation of that damper's brace (m).
-    DamperStroke,
-}
-
-/// The response a request names: its kind at `floor`, the roof when absent.
-pub fn response_of(floor: Option<usize>, kind: ResponseKind, problem: &Problem) -> Response {
-    let floor = floor.unwrap_or(problem.structure.floors());
-    match kind {
-        ResponseKind::Displacement => Response::Displacement { floor },
-        ResponseKind::Drift => Response::Drift { floor },
-        ResponseKind::Acceleration => Response::Acceleration { floor },
-        ResponseKind::DamperForce => Response::DamperForce { floor },
-        ResponseKind::DamperStroke => Response::DamperStroke { floor },
-    }
-}
 
 /// `POST /v1/metamodels/{id}/exceedance`: every field optional.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
@@ -66,6 +37,11 @@ pub struct ExceedanceRequest {
     #[schema(minimum = 1, maximum = 200)]
     #[serde(default, deserialize_with = "crate::whole::optional_count")]
     pub floor: Option<usize>,
+    /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
+    /// largest among the group's dampers.
+    #[schema(minimum = 1, maximum = 10)]
+    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    pub group: Option<usize>,
     pub response: ResponseKind,
     /// Peak values (in the response's unit: m, m/s² or N; 0 to 10⁹) at which to evaluate the curve; 50 evenly spread over the sampled
     /// peaks when absent.
@@ -90,6 +66,7 @@ impl Default for ExceedanceRequest {
             samples: 1000,
             seed: 1,
             floor: None,
+            group: None,
             response: ResponseKind::Displacement,
             thresholds: None,
             fixed: BTreeMap::new(),
@@ -133,18 +110,23 @@ impl ExceedanceRequest {
         metamodel_id: &str,
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
-        let response = response_of(self.floor, self.response, problem);
-        response.check(&problem.structure)?;
+        let response = self.response.located(self.floor, self.group, &problem.structure)?;
         let inputs = held_inputs(problem, &self.fixed)?;
         let (peaks, profile) = match self.profile_quantile {
             None => (metamodel_peaks(metamodel, problem, &inputs, self.samples, self.seed, response, observer)?, None),
             Some(p) => {
                 let (samples, seed) = (self.samples, self.seed);
                 let all = metamodel_profiles(metamodel, problem, &inputs, samples, seed, response.kind(), observer)?;
-                let column =
-                    all.responses.iter().position(|r| *r == response).expect("the response's floor is profiled");
+                let columns: Vec<usize> = response
+                    .members(&problem.structure)?
+                    .iter()
+                    .map(|m| {
+                        all.responses.iter().position(|r| r == m).expect("every floor with the response is profiled")
+                    })
+                    .collect();
                 let profile = all.quantile_profile(p, self.confidence)?;
-                (all.peaks.iter().map(|peaks| peaks[column]).collect(), Some(profile))
+                let largest = |peaks: &Vec<f64>| columns.iter().fold(0.0, |m: f64, &c| m.max(peaks[c]));
+                (all.peaks.iter().map(largest).collect(), Some(profile))
             }
         };
         let thresholds = self.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
@@ -171,6 +153,7 @@ pub fn held_inputs(problem: &Problem, fixed: &BTreeMap<String, f64>) -> Result<I
 pub struct ExceedanceAnswer {
     #[serde(flatten)]
     pub curve: ExceedanceCurve,
+    #[schema(value_type = ResponseName)]
     pub response: Response,
     /// The quantile profile, when the request asked for one.
     #[serde(skip_serializing_if = "Option::is_none", default)]
