@@ -74,6 +74,7 @@ pub fn motion_sink(
         .collect::<Result<_>>()?;
     let zero = [[0.0; LANES]; MAX_MODES];
     let accelerations = responses.iter().any(|r| matches!(r, Response::Acceleration { .. }));
+    let keeps_outputs = targets.iter().any(|t| matches!(t.target, Target::Combination { .. }));
     Ok(Box::new(MotionPeaks {
         time_step: problem.storm.time_step,
         modes: lanes.inverse_masses.len(),
@@ -86,6 +87,8 @@ pub fn motion_sink(
         current_input: zero,
         seen: 0,
         velocities: Vec::new(),
+        outputs: Vec::new(),
+        keeps_outputs,
         linear: accelerations.then(Vec::new),
         chunk_linear: Vec::new(),
         chunk_speed: Vec::new(),
@@ -217,7 +220,7 @@ struct MotionPeaks {
     modes: usize,
     lanes: LaneModels,
     targets: Vec<Tracked>,
-    /// The targets other than accelerations, which take every step (accelerations take blocks).
+    /// The combinations and damper forces ([`MotionPeaks::reduce_stepped`]).
     stepped: Vec<usize>,
     /// ŷ(0), and the last block's last two outputs and last inputs: a step is processed once its
     /// successor has arrived, for its central difference.
@@ -235,6 +238,10 @@ struct MotionPeaks {
     /// chunk is ruled out by Σ_m |φ_m| max|ℓ_m| and Σ_m K_m max|ŷ'_m| without looking at its steps.
     chunk_linear: Vec<Lanes>,
     chunk_speed: Vec<Lanes>,
+    /// The block's processed steps' scaled outputs ŷ_m, `[i·M + m]`, when a combination or a
+    /// damper force is tracked.
+    outputs: Vec<Lanes>,
+    keeps_outputs: bool,
     /// Scratch: one lane's damper velocities, then f(v), at a step computed exactly.
     forces: Vec<f64>,
     exact: ExactSteps,
@@ -304,10 +311,13 @@ impl MotionSink for MotionPeaks {
 }
 
 impl MotionPeaks {
-    /// The step whose velocities were pushed last, from its outputs `y` and inputs `q`: the
-    /// combinations' and damper velocities' peaks, and the modal linear parts ℓ_m.
+    /// The step whose velocities were pushed last, from its outputs `y` and inputs `q`: kept for
+    /// the combinations, and its modal linear parts ℓ_m.
     #[inline(always)]
     fn step(&mut self, y: &[Lanes], q: &[Lanes]) {
+        if self.keeps_outputs {
+            self.outputs.extend_from_slice(y);
+        }
         let v = &self.velocities[self.velocities.len() - self.modes..];
         if let Some(linear) = &mut self.linear {
             let lanes = &self.lanes;
@@ -319,30 +329,62 @@ impl MotionPeaks {
                 }));
             }
         }
-        for &t in &self.stepped {
-            let tracked = &mut self.targets[t];
-            match &tracked.target {
-                Target::Combination { gains, offsets } => {
-                    let mut u = *offsets;
-                    for (g, y) in gains.iter().zip(y) {
-                        (0..LANES).for_each(|l| u[l] = g.mul_add(y[l], u[l]));
-                    }
-                    (0..LANES).for_each(|l| tracked.best[l] = tracked.best[l].max(u[l].abs()));
-                }
-                Target::DamperForce { damper } => {
-                    let mut u = [0.0; LANES];
-                    for (g, v) in self.lanes.velocity_map[*damper].iter().zip(v) {
-                        (0..LANES).for_each(|l| u[l] = g.mul_add(v[l], u[l]));
-                    }
-                    (0..LANES).for_each(|l| tracked.best[l] = tracked.best[l].max(u[l].abs()));
-                }
-                Target::Acceleration { .. } => {}
-            }
-        }
     }
 
-    /// The block's accelerations into their running peaks.
+    /// The block's combinations and damper velocities into their running peaks, a chunk of
+    /// [`CHUNK`] steps at a time: each is Σ_m g_m x_m (plus an offset) over the outputs or the
+    /// velocities, and evaluated with the chunk's extremes of x_m in place of x_m, the same
+    /// multiply-adds bound it over the chunk exactly (a rounded multiply-add is monotone in each
+    /// argument); only chunks whose bound beats some lane's peak are looked at step by step.
+    fn reduce_stepped(&mut self) {
+        let modes = self.modes;
+        let count = self.velocities.len() / modes;
+        let combinations = self.keeps_outputs;
+        let dampers = self.targets.iter().any(|t| matches!(t.target, Target::DamperForce { .. }));
+        let none = [[[0.0; LANES]; 2]; MAX_MODES];
+        for first in (0..count).step_by(CHUNK) {
+            let range = first * modes..(first + CHUNK).min(count) * modes;
+            let outputs: &[Lanes] = if combinations { &self.outputs[range.clone()] } else { &[] };
+            let velocities = &self.velocities[range];
+            let output_range = if combinations { ranges(outputs, modes) } else { none };
+            let velocity_range = if dampers { ranges(velocities, modes) } else { none };
+            for &t in &self.stepped {
+                let Tracked { target, best } = &mut self.targets[t];
+                let (gains, start, values, extremes) = match target {
+                    Target::Combination { gains, offsets } => (&gains[..], *offsets, outputs, &output_range),
+                    Target::DamperForce { damper } => {
+                        (&self.lanes.velocity_map[*damper][..], [0.0; LANES], velocities, &velocity_range)
+                    }
+                    Target::Acceleration { .. } => continue,
+                };
+                let (mut high, mut low) = (start, start);
+                for (m, g) in gains.iter().enumerate() {
+                    let (up, down) = if *g >= 0.0 { (1, 0) } else { (0, 1) };
+                    (0..LANES).for_each(|l| {
+                        high[l] = g.mul_add(extremes[m][up][l], high[l]);
+                        low[l] = g.mul_add(extremes[m][down][l], low[l]);
+                    });
+                }
+                if (0..LANES).all(|l| high[l].max(-low[l]) <= best[l]) {
+                    continue;
+                }
+                for step in values.chunks_exact(modes) {
+                    let mut u = start;
+                    for (g, x) in gains.iter().zip(step) {
+                        (0..LANES).for_each(|l| u[l] = g.mul_add(x[l], u[l]));
+                    }
+                    (0..LANES).for_each(|l| best[l] = best[l].max(u[l].abs()));
+                }
+            }
+        }
+        self.outputs.clear();
+    }
+
+    /// The block's responses into their running peaks.
     fn reduce(&mut self) {
+        if !self.stepped.is_empty() {
+            self.reduce_stepped();
+        }
         if let Some(linear) = &mut self.linear {
             let modes = self.modes;
             let count = self.velocities.len() / modes;
@@ -383,6 +425,20 @@ impl MotionPeaks {
         }
         self.velocities.clear();
     }
+}
+
+/// Per mode the lowest and highest of `values` (`[i·M + m]`), every lane: `[m][0]` and `[m][1]`.
+fn ranges(values: &[Lanes], modes: usize) -> [[Lanes; 2]; MAX_MODES] {
+    let mut extremes = [[[f64::INFINITY; LANES], [f64::NEG_INFINITY; LANES]]; MAX_MODES];
+    for step in values.chunks_exact(modes) {
+        for (x, [low, high]) in step.iter().zip(&mut extremes) {
+            (0..LANES).for_each(|l| {
+                low[l] = low[l].min(x[l]);
+                high[l] = high[l].max(x[l]);
+            });
+        }
+    }
+    extremes
 }
 
 /// Per lane, the block's chunks of [`CHUNK`] steps in decreasing order of their bound, and in a

@@ -5,7 +5,8 @@ use crate::wind::ModalForces;
 
 /// Fed synthetic scaled histories in uneven blocks, the sink's peaks equal those of the same
 /// physical histories through [`SampleModel`] (every damper at every step), for damper laws
-/// below, at and above α = 1 (the bound's two forms), in every lane; the damper force too.
+/// below, at and above α = 1 (the bound's two forms), in every lane; damper forces and
+/// combinations (drift, displacement), bounded a chunk at a time, too.
 #[test]
 fn peaks_equal_those_of_every_step_for_any_exponent() {
     let mut problem = Problem::preset("frame40-kn").unwrap().with_storm(30.0, 0.01).unwrap();
@@ -28,7 +29,7 @@ fn peaks_equal_those_of_every_step_for_any_exponent() {
     {
         problem.damper_exponent = alpha;
         let scales =
-            ModalScales { outputs: outputs.clone(), inputs: inputs_scale.clone(), levels: vec![[0.0; LANES]; 3] };
+            ModalScales { outputs: outputs.clone(), inputs: inputs_scale.clone(), levels: vec![[1.0; LANES]; 3] };
         let floors = problem.structure.floors();
         let shapes: Vec<Vec<f64>> =
             (0..modes).map(|m| (0..floors).map(|f| problem.modes.shapes[(f, m)]).collect()).collect();
@@ -55,6 +56,8 @@ fn peaks_equal_those_of_every_step_for_any_exponent() {
             Response::Acceleration { floor: floors },
             Response::Acceleration { floor: 9 },
             Response::DamperForce { floor: 5 },
+            Response::Drift { floor: 7 },
+            Response::Displacement { floor: floors },
         ];
         // Together (the accelerations sharing their exact steps' damper forces) as alone.
         assert_eq!(run(&responses), responses.iter().map(|r| run(&[*r])[0]).collect::<Vec<_>>());
