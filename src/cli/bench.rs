@@ -1,8 +1,9 @@
 //! `windmeta bench`: the method's costs side by side, measured in one run so that their ratios are
 //! honest: a full calibration and its stages, the per-sample stages of one full-size storm (wind by
 //! both paths, both reference integrators, the metamodel's free run on the same storm), and an
-//! exceedance curve, a roof-acceleration curve, a drift profile of every floor, an annual curve with
-//! ten return levels and Sobol indices end to end. Speed is measured here and in `benches/`, never asserted in a test.
+//! exceedance curve, a roof-acceleration curve, drift and acceleration profiles of every floor, an
+//! annual curve with ten return levels and Sobol indices end to end. Speed is measured here and in
+//! `benches/`, never asserted in a test.
 
 use crate::analysis::{
     HazardOptions, Response, ResponseKind, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve,
@@ -132,23 +133,22 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         acceleration,
         repetitions.min(3),
     ));
-    let profile = time(repetitions.min(3), |r| {
-        let samples = metamodel_profiles(
-            &metamodel,
-            &problem,
-            &problem.inputs,
-            args.samples,
-            1 + r,
-            ResponseKind::Drift,
-            &Silent,
-        )?;
-        samples.quantile_profile(0.5, 0.95)
-    })?;
-    rows.push(row(
-        format!("drift profile, every floor, median with its band, {} samples (all threads)", args.samples),
-        profile,
-        repetitions.min(3),
-    ));
+    for kind in [ResponseKind::Drift, ResponseKind::Acceleration] {
+        let profile = time(repetitions.min(3), |r| {
+            let inputs = &problem.inputs;
+            let samples = metamodel_profiles(&metamodel, &problem, inputs, args.samples, 1 + r, kind, &Silent)?;
+            samples.quantile_profile(0.5, 0.95)
+        })?;
+        rows.push(row(
+            format!(
+                "{} profile, every floor, median with its band, {} samples (all threads)",
+                kind.name(),
+                args.samples
+            ),
+            profile,
+            repetitions.min(3),
+        ));
+    }
     let hazard = HazardOptions {
         climate: *problem.inputs.marginal(WIND_SPEED)?,
         samples: args.hazard_samples,
