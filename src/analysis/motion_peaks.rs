@@ -238,8 +238,8 @@ struct MotionPeaks {
     /// chunk is ruled out by Σ_m |φ_m| max|ℓ_m| and Σ_m K_m max|ŷ'_m| without looking at its steps.
     chunk_linear: Vec<Lanes>,
     chunk_speed: Vec<Lanes>,
-    /// The block's processed steps' scaled outputs ŷ_m, `[i·M + m]`, when a combination or a
-    /// damper force is tracked.
+    /// The block's processed steps' scaled outputs ŷ_m, `[i·M + m]`, kept when a combination is
+    /// tracked.
     outputs: Vec<Lanes>,
     keeps_outputs: bool,
     /// Scratch: one lane's damper velocities, then f(v), at a step computed exactly.

@@ -151,11 +151,6 @@ impl TryFrom<ResponseName> for Response {
 }
 
 impl Response {
-    /// The response of the kind named `kind` at `floor`.
-    pub fn of_kind(kind: &str, floor: usize) -> Result<Response> {
-        Ok(ResponseKind::parse(kind)?.at_floor(floor))
-    }
-
     /// The floor of a floor's response; `None` for a group's envelope.
     pub fn floor(&self) -> Option<usize> {
         match *self {
@@ -227,20 +222,23 @@ impl Response {
     /// Checks the floor, for a damper response that the storey has a damper, for a group's
     /// envelope that the group exists.
     pub fn check(&self, structure: &Structure) -> Result<()> {
-        let Some(floor) = self.floor() else {
-            let (Response::GroupDamperForce { group } | Response::GroupDamperStroke { group }) = *self else {
-                unreachable!("every other response is a floor's")
-            };
-            let groups = structure.damper_groups();
-            if group == 0 || group > groups {
-                let range = if groups == 0 {
-                    "the structure has no dampers".to_string()
-                } else {
-                    format!("must be between 1 and {groups}")
-                };
-                return Err(Error::invalid("group", format!("{range}, got {group}")));
+        let floor = match *self {
+            Response::GroupDamperForce { group } | Response::GroupDamperStroke { group } => {
+                let groups = structure.damper_groups();
+                if group == 0 || group > groups {
+                    let range = match groups {
+                        0 => "the structure has no dampers".to_string(),
+                        _ => format!("must be between 1 and {groups}"),
+                    };
+                    return Err(Error::invalid("group", format!("{range}, got {group}")));
+                }
+                return Ok(());
             }
-            return Ok(());
+            Response::Displacement { floor }
+            | Response::Drift { floor }
+            | Response::Acceleration { floor }
+            | Response::DamperForce { floor }
+            | Response::DamperStroke { floor } => floor,
         };
         let floors = structure.floors();
         if floor == 0 || floor > floors {
