@@ -1,9 +1,8 @@
 //! The reference model's responses, histories and peaks, for `windmeta simulate` and
-//! `windmeta sample-peaks`: a reduced-order run gives
-//! every response through the same equations as the metamodel's ([`ResponseView`], with the
-//! integrator's own velocities); a full-order run reads them off its floors' motion, with
-//! Newmark's own velocities (damper forces) and accelerations, which satisfy every floor's
-//! equation of motion at every step.
+//! `windmeta sample-peaks`: a reduced-order run gives every response through the same equations as
+//! the metamodel's ([`ResponseView`], with the integrator's own velocities); a full-order run reads
+//! them off its floors' motion, with Newmark's own velocities (damper forces) and accelerations,
+//! which satisfy every floor's equation of motion at every step.
 
 use super::response::{damper_below, envelope};
 use super::{Response, ResponseView};
