@@ -13,6 +13,9 @@ use crate::surrogate::{LANES, Lanes};
 pub(super) struct Gate {
     best: f64,
     reach: f64,
+    /// B/reach: a multiplication places |L| on the grid (a division cost more than the rest of the
+    /// test; the bound's margin covers the rounding either way).
+    bins_per_reach: f64,
     slow: [f64; GATE_BINS + 1],
 }
 
@@ -84,7 +87,7 @@ const GATE_BINS: usize = 16;
 
 impl Default for Gate {
     fn default() -> Self {
-        Gate { best: f64::NAN, reach: 0.0, slow: [0.0; GATE_BINS + 1] }
+        Gate { best: f64::NAN, reach: 0.0, bins_per_reach: 0.0, slow: [0.0; GATE_BINS + 1] }
     }
 }
 
@@ -96,6 +99,7 @@ impl Gate {
         }
         self.best = best;
         self.reach = best / (1.0 + BOUND_MARGIN);
+        self.bins_per_reach = GATE_BINS as f64 / self.reach;
         for (j, slow) in self.slow.iter_mut().enumerate() {
             let room = (1.0 - j as f64 / GATE_BINS as f64) * self.reach;
             *slow = if p > 0.0 { (room / p).powf(1.0 / alpha) } else { f64::INFINITY };
@@ -107,7 +111,7 @@ impl Gate {
         if linear >= self.reach || linear.is_nan() {
             return true;
         }
-        let j = (linear / self.reach * GATE_BINS as f64) as usize;
+        let j = (linear * self.bins_per_reach) as usize;
         speed > self.slow[(j + 1).min(GATE_BINS)]
     }
 }
