@@ -500,7 +500,13 @@ fn reduce_acceleration(
                     s = k[m][l].mul_add(velocities[i * modes + m][l].abs(), s);
                 }
                 if gate.may_beat(x.abs(), s) {
-                    candidates.push((most(l, x.abs(), s), i, x));
+                    let damper = gates.damper_bound(l, s);
+                    let step_bound = if damper.is_finite() {
+                        (1.0 + BOUND_MARGIN) * (x.abs() + damper)
+                    } else {
+                        most(l, x.abs(), s)
+                    };
+                    candidates.push((step_bound, i, x));
                 }
             }
             candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
