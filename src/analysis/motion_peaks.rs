@@ -455,7 +455,12 @@ fn reduce_acceleration(
     let alpha = lanes.exponent;
     let Floor { shape, modal, bound, k, gates } = floor;
     let Steps { velocities, linear, chunk_linear, chunk_speed, modes } = *steps;
-    let most = |l: usize, linear: f64, speed: f64| (1.0 + BOUND_MARGIN) * (linear + bound[l] * power(speed, alpha));
+    // (1 + ε)(|L| + P S^α), the power spared by the lowest tangent where there are tangents.
+    let most = |gates: &Gates, l: usize, linear: f64, speed: f64| {
+        let damper = gates.damper_bound(l, speed);
+        let damper = if damper.is_finite() { damper } else { bound[l] * power(speed, alpha) };
+        (1.0 + BOUND_MARGIN) * (linear + damper)
+    };
     let count = velocities.len() / modes;
     // Each chunk's bounds on |L| and Σ_m K_m|ŷ'_m|, every lane at once.
     (0..LANES).for_each(|l| gates.open_to(l, peaks[l], bound[l], alpha));
@@ -483,7 +488,7 @@ fn reduce_acceleration(
                 .filter(|(_, (lanes, linear, speed))| {
                     lanes & (1 << l) != 0 && gates.lanes[l].may_beat(linear[l], speed[l])
                 })
-                .map(|(c, (_, linear, speed))| (most(l, linear[l], speed[l]), c * CHUNK)),
+                .map(|(c, (_, linear, speed))| (most(gates, l, linear[l], speed[l]), c * CHUNK)),
         );
         chunks.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
         for &(chunk_bound, first) in chunks.iter() {
@@ -500,13 +505,7 @@ fn reduce_acceleration(
                     s = k[m][l].mul_add(velocities[i * modes + m][l].abs(), s);
                 }
                 if gate.may_beat(x.abs(), s) {
-                    let damper = gates.damper_bound(l, s);
-                    let step_bound = if damper.is_finite() {
-                        (1.0 + BOUND_MARGIN) * (x.abs() + damper)
-                    } else {
-                        most(l, x.abs(), s)
-                    };
-                    candidates.push((step_bound, i, x));
+                    candidates.push((most(gates, l, x.abs(), s), i, x));
                 }
             }
             candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
