@@ -19,6 +19,7 @@
 //! chunk maxima of |ℓ_m| and |ẏ_m| before looking at its steps, and a step's modal damper forces,
 //! once computed, serve every floor.
 
+mod exact;
 mod gates;
 
 use super::Response;
@@ -27,6 +28,7 @@ use crate::dynamics::power;
 use crate::error::{Error, Result};
 use crate::problem::{MAX_MODES, Problem};
 use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
+use exact::ExactSteps;
 use gates::Gates;
 
 /// Steps whose bound is taken together before any of them is looked at one by one.
@@ -518,57 +520,6 @@ fn reduce_acceleration(
                 *best = best.max((x - dampers).abs());
             }
         }
-    }
-}
-
-/// The modal damper forces g_m of the block's (step, lane) pairs computed exactly, shared by every
-/// floor's acceleration: `modal[i·LANES + l]`, valid where `stamps` holds the block's number.
-#[derive(Default)]
-struct ExactSteps {
-    block: u64,
-    stamps: Vec<u64>,
-    modal: Vec<Modal1>,
-}
-
-/// One lane's modal values.
-type Modal1 = [f64; MAX_MODES];
-
-impl ExactSteps {
-    /// A new block of `steps` steps: every entry invalid.
-    fn next_block(&mut self, steps: usize) {
-        self.block += 1;
-        if self.stamps.len() < steps * LANES {
-            self.stamps.resize(steps * LANES, 0);
-            self.modal.resize(steps * LANES, [0.0; MAX_MODES]);
-        }
-    }
-
-    /// Step i's modal damper forces in lane l, computed (with `forces` as scratch) unless a floor
-    /// already did.
-    fn modal_forces(
-        &mut self,
-        i: usize,
-        l: usize,
-        velocities: &[Lanes],
-        lanes: &LaneModels,
-        forces: &mut [f64],
-    ) -> &[f64] {
-        let modes = lanes.inverse_masses.len();
-        let key = i * LANES + l;
-        if self.stamps[key] != self.block {
-            let v = &velocities[i * modes..(i + 1) * modes];
-            for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
-                *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
-            }
-            for force in forces.iter_mut() {
-                *force = power(force.abs(), lanes.exponent).copysign(*force);
-            }
-            for (m, g) in self.modal[key][..modes].iter_mut().enumerate() {
-                *g = forces.iter().zip(&lanes.map).zip(&lanes.coefficients).map(|((f, g), c)| g[m] * c[l] * f).sum();
-            }
-            self.stamps[key] = self.block;
-        }
-        &self.modal[key][..modes]
     }
 }
 
