@@ -76,7 +76,7 @@ pub fn motion_sink(
         .collect::<Result<_>>()?;
     let zero = [[0.0; LANES]; MAX_MODES];
     let accelerations = responses.iter().any(|r| matches!(r, Response::Acceleration { .. }));
-    let keeps_outputs = targets.iter().any(|t| matches!(t.target, Target::Combination { .. }));
+    let combinations = targets.iter().any(|t| matches!(t.target, Target::Combination { .. }));
     Ok(Box::new(MotionPeaks {
         time_step: problem.storm.time_step,
         modes: lanes.inverse_masses.len(),
@@ -89,8 +89,7 @@ pub fn motion_sink(
         current_input: zero,
         seen: 0,
         velocities: Vec::new(),
-        outputs: Vec::new(),
-        keeps_outputs,
+        outputs: combinations.then(Vec::new),
         linear: accelerations.then(Vec::new),
         chunk_linear: Vec::new(),
         chunk_speed: Vec::new(),
@@ -242,8 +241,7 @@ struct MotionPeaks {
     chunk_speed: Vec<Lanes>,
     /// The block's processed steps' scaled outputs ŷ_m, `[i·M + m]`, kept when a combination is
     /// tracked.
-    outputs: Vec<Lanes>,
-    keeps_outputs: bool,
+    outputs: Option<Vec<Lanes>>,
     /// Scratch: one lane's damper velocities, then f(v), at a step computed exactly.
     forces: Vec<f64>,
     exact: ExactSteps,
@@ -317,8 +315,8 @@ impl MotionPeaks {
     /// the combinations, and its modal linear parts ℓ_m.
     #[inline(always)]
     fn step(&mut self, y: &[Lanes], q: &[Lanes]) {
-        if self.keeps_outputs {
-            self.outputs.extend_from_slice(y);
+        if let Some(outputs) = &mut self.outputs {
+            outputs.extend_from_slice(y);
         }
         let v = &self.velocities[self.velocities.len() - self.modes..];
         if let Some(linear) = &mut self.linear {
@@ -341,14 +339,13 @@ impl MotionPeaks {
     fn reduce_stepped(&mut self) {
         let modes = self.modes;
         let count = self.velocities.len() / modes;
-        let combinations = self.keeps_outputs;
         let dampers = self.targets.iter().any(|t| matches!(t.target, Target::DamperForce { .. }));
         let none = [[[0.0; LANES]; 2]; MAX_MODES];
         for first in (0..count).step_by(CHUNK) {
             let range = first * modes..(first + CHUNK).min(count) * modes;
-            let outputs: &[Lanes] = if combinations { &self.outputs[range.clone()] } else { &[] };
+            let outputs: &[Lanes] = self.outputs.as_ref().map_or(&[], |o| &o[range.clone()]);
             let velocities = &self.velocities[range];
-            let output_range = if combinations { ranges(outputs, modes) } else { none };
+            let output_range = if self.outputs.is_some() { ranges(outputs, modes) } else { none };
             let velocity_range = if dampers { ranges(velocities, modes) } else { none };
             for &t in &self.stepped {
                 let Tracked { target, best } = &mut self.targets[t];
@@ -379,7 +376,9 @@ impl MotionPeaks {
                 }
             }
         }
-        self.outputs.clear();
+        if let Some(outputs) = &mut self.outputs {
+            outputs.clear();
+        }
     }
 
     /// The block's responses into their running peaks.

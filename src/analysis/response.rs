@@ -73,9 +73,10 @@ impl ResponseKind {
         }
     }
 
-    /// The kind named `name`.
+    /// The kind named `name` (a dash standing for an underscore, as on a command line).
     pub fn parse(name: &str) -> Result<ResponseKind> {
-        ResponseKind::ALL.into_iter().find(|kind| kind.name() == name).ok_or_else(|| {
+        let spelled = name.replace('-', "_");
+        ResponseKind::ALL.into_iter().find(|kind| kind.name() == spelled).ok_or_else(|| {
             let names: Vec<&str> = ResponseKind::ALL.iter().map(|k| k.name()).collect();
             Error::invalid("response", format!("unknown response `{name}`; the responses are {}", names.join(", ")))
         })

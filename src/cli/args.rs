@@ -111,8 +111,7 @@ pub struct ResponseArgs {
 
 impl ResponseArgs {
     pub fn response(&self, problem: &Problem) -> Result<Response> {
-        let kind =
-            if self.drift { ResponseKind::Drift } else { ResponseKind::parse(&self.response.replace('-', "_"))? };
+        let kind = if self.drift { ResponseKind::Drift } else { ResponseKind::parse(&self.response)? };
         kind.located(self.floor, self.group, &problem.structure)
     }
 }

@@ -45,7 +45,7 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, problem) = read_metamodel(&args.sampling.model)?;
     let inputs = args.sampling.held_inputs(&problem.inputs)?;
-    let kind = ResponseKind::parse(&args.response.replace('-', "_"))?;
+    let kind = ResponseKind::parse(&args.response)?;
     let started = Instant::now();
     let seed = args.analysis.seed;
     let samples =

@@ -141,7 +141,7 @@ fn history_responses(args: &SimulateArgs, problem: &Problem) -> Result<Vec<Respo
     let kinds = if args.histories.is_empty() {
         vec![ResponseKind::Displacement]
     } else {
-        args.histories.iter().map(|k| ResponseKind::parse(&k.replace('-', "_"))).collect::<Result<_>>()?
+        args.histories.iter().map(|k| ResponseKind::parse(k)).collect::<Result<_>>()?
     };
     let mut responses = Vec::new();
     for kind in kinds {
