@@ -18,6 +18,10 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(status, 200);
     assert_eq!(presets["presets"].as_array().unwrap().len(), 2);
     assert_eq!(app.get("/v1/presets/frame40").await.1["floors"], 40);
+    let defaults: Vec<&Value> =
+        presets["presets"].as_array().unwrap().iter().filter(|p| p["default"] == true).collect();
+    assert_eq!(defaults.len(), 1, "one preset is the default: {presets}");
+    assert_eq!(defaults[0]["name"], "frame40-kn");
 
     let response = app
         .post("/v1/calibrations", json!({"preset": "frame40-kn", "experiments": 32, "duration_s": 30, "seed": 3}))
@@ -46,6 +50,25 @@ async fn calibrate_follow_fetch_and_sample() {
     let local = calibrate(&Problem::from_spec(&spec).unwrap(), &options, &Silent).unwrap();
     assert_eq!(metamodel["models"], serde_json::to_value(&local.models).unwrap());
     assert_eq!(app.get("/v1/metamodels").await.1["metamodels"][0]["id"], id.as_str());
+
+    // Its study: the building, the storms, each input's law and the range its experiments spanned.
+    let (status, study) = app.get(&format!("/v1/metamodels/{id}/study")).await;
+    assert_eq!(status, 200);
+    assert_eq!((study["floors"].as_u64(), study["damper_groups"].as_u64()), (Some(40), Some(4)), "{study}");
+    assert_eq!((study["duration_s"].as_f64(), study["time_step_s"].as_f64()), (Some(30.0), Some(0.01)));
+    assert_eq!(study["responses"].as_array().unwrap().len(), 5);
+    let studied = Problem::from_spec(&spec).unwrap();
+    let design = windmeta::surrogate::design(&studied, &options).unwrap().points;
+    let inputs = study["inputs"].as_array().unwrap();
+    assert_eq!(inputs.len(), studied.inputs.inputs.len());
+    for (k, input) in inputs.iter().enumerate() {
+        assert_eq!(input["name"], studied.inputs.inputs[k].name.as_str());
+        let values = design.iter().map(|x| x[k]);
+        let range = [values.clone().fold(f64::INFINITY, f64::min), values.fold(f64::NEG_INFINITY, f64::max)];
+        assert_eq!(input["calibrated_range"], json!(range), "{input}");
+    }
+    assert_eq!(inputs.last().unwrap()["marginal"]["distribution"], "frechet");
+    assert_eq!(app.get("/v1/metamodels/nothing/study").await.0, 404);
 
     let path = format!("/v1/metamodels/{id}/exceedance");
     let curve: Value =
@@ -244,6 +267,7 @@ async fn calibrate_follow_fetch_and_sample() {
     );
     assert_eq!(done["result"]["reference_peak"].as_array().unwrap().len(), 4);
     assert_eq!(done["result"]["fixed"], json!({"wind_speed": 38.0}));
+    assert_eq!(done["metamodel_id"], id.as_str(), "a validation names the metamodel it validates");
     let (s, ct, body) =
         problem(app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 1})).await).await;
     assert_problem(s, &ct, &body, 422, "samples");

@@ -12,7 +12,7 @@ mod spec;
 mod storms;
 
 pub use inputs::PhysicalParameters;
-pub use presets::PRESETS;
+pub use presets::{DEFAULT_PRESET, PRESETS};
 pub use spec::ProblemSpec;
 pub use storms::{Order, StormRun, WindPath};
 

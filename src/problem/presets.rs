@@ -7,6 +7,8 @@ use crate::structure::{Structure, frame40};
 /// The built-in studies: the paper's frame with damper coefficients as printed (N·s/m) and the same
 /// numbers in kN·s/m, where the dampers really act.
 pub const PRESETS: [&str; 2] = ["frame40", "frame40-kn"];
+/// The study a calibration request without a preset or a structure calibrates.
+pub const DEFAULT_PRESET: &str = "frame40-kn";
 
 /// The study's name, its structure and the scale of its damper coefficients' default range
 /// (1 for N·s/m as printed, 1000 for kN·s/m), from the spec's preset and custom structure.

@@ -107,7 +107,7 @@ impl CalibrationRequest {
     /// The study and the options, checked; errors name the field.
     pub fn resolve(&self, config: &ServeArgs) -> Result<(Problem, CalibrationOptions)> {
         let preset = if self.preset.is_none() && self.structure.is_none() {
-            Some("frame40-kn".into())
+            Some(crate::problem::DEFAULT_PRESET.into())
         } else {
             self.preset.clone()
         };

@@ -7,8 +7,10 @@ mod health;
 pub mod metamodels;
 mod openapi;
 pub mod operations;
+mod page;
 mod presets;
 mod sampling;
+mod study;
 mod telemetry;
 
 pub use auth::ApiKeys;
@@ -39,6 +41,7 @@ fn documented() -> OpenApiRouter<AppState> {
         .merge(calibrations::router())
         .merge(operations::router())
         .merge(metamodels::router())
+        .merge(study::router())
         .merge(analyses::router())
 }
 
@@ -48,7 +51,10 @@ pub fn router(state: AppState) -> Router {
         Role::All | Role::Api => documented(),
         Role::Worker => OpenApiRouter::with_openapi(openapi::base()).merge(health::router()).merge(telemetry::router()),
     };
-    let (routes, mut spec) = served.split_for_parts();
+    let (mut routes, mut spec) = served.split_for_parts();
+    if state.config.role != Role::Worker {
+        routes = routes.merge(page::router());
+    }
     openapi::add_shared_responses(&mut spec);
     openapi::state_configured_limits(&mut spec, &state.config);
     let spec = Arc::new(spec.to_pretty_json().expect("the OpenAPI document serialises"));

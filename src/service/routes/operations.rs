@@ -87,7 +87,7 @@ pub struct Operation {
     pub progress: Option<Progress>,
     /// Why it failed.
     pub error: Option<String>,
-    /// The metamodel a succeeded calibration stored.
+    /// The metamodel a succeeded calibration stored, or the one a validation or analysis works on.
     pub metamodel_id: Option<String>,
     /// The report of a succeeded validation, or the answer of a succeeded sampling request.
     pub result: Option<OperationResult>,
@@ -111,6 +111,12 @@ fn stored<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ApiError> {
     serde_json::from_str(text).map_err(ApiError::internal)
 }
 
+/// The metamodel named in a validation's or an analysis's job (its other fields left unread).
+#[derive(serde::Deserialize)]
+struct WorksOn {
+    metamodel_id: Option<String>,
+}
+
 /// The public view of a job.
 pub fn operation(row: &JobRow) -> Result<Operation, ApiError> {
     let kind: OperationKind = stored(&format!("\"{}\"", row.kind))?;
@@ -130,7 +136,10 @@ pub fn operation(row: &JobRow) -> Result<Operation, ApiError> {
         done: matches!(state, OperationState::Succeeded | OperationState::Failed | OperationState::Cancelled),
         progress: row.progress.as_deref().map(stored).transpose()?,
         error: row.error.clone(),
-        metamodel_id: row.metamodel_id.clone(),
+        metamodel_id: match kind {
+            OperationKind::Calibration => row.metamodel_id.clone(),
+            _ => stored::<WorksOn>(&row.request)?.metamodel_id,
+        },
         result,
         attempts: row.attempts,
         created_at_ms: row.created_at,

@@ -1,6 +1,6 @@
 //! The built-in studies and their default calibration requests, for clients to start from.
 
-use crate::problem::{PRESETS, Problem};
+use crate::problem::{DEFAULT_PRESET, PRESETS, Problem};
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::{AppState, CalibrationRequest};
 use crate::surrogate::CalibrationOptions;
@@ -22,6 +22,8 @@ pub struct Preset {
     pub description: String,
     pub floors: usize,
     pub roof_height_m: f64,
+    /// Whether a calibration request without `preset` or `structure` calibrates this study.
+    pub default: bool,
     /// Natural circular frequencies of the modes kept (rad/s), at the mean inputs.
     pub frequencies_rad_s: Vec<f64>,
     /// The calibration request the defaults amount to, spelled out.
@@ -45,6 +47,7 @@ fn describe(name: &str) -> Result<Preset, ApiError> {
         name: name.to_string(),
         description: description.to_string(),
         floors: problem.structure.floors(),
+        default: name == DEFAULT_PRESET,
         roof_height_m: *problem.structure.floor_elevations.last().expect("a structure has floors"),
         frequencies_rad_s: problem.modes.frequencies.clone(),
         default_calibration: CalibrationRequest {
