@@ -38,11 +38,10 @@ async fn the_page_is_served_with_its_policy_and_caching() {
     let again = client.get(format!("{}/", app.address)).header("If-None-Match", &etag).send().await.unwrap();
     assert_eq!(again.status(), 304);
 
-    for (asset, content_type) in [
-        ("app.js", "text/javascript; charset=utf-8"),
-        ("charts.js", "text/javascript; charset=utf-8"),
-        ("style.css", "text/css; charset=utf-8"),
-    ] {
+    let script = "text/javascript; charset=utf-8";
+    let scripts =
+        ["charts.js", "client.js", "operations.js", "models.js", "analyses.js", "app.js"].map(|name| (name, script));
+    for (asset, content_type) in scripts.into_iter().chain([("style.css", "text/css; charset=utf-8")]) {
         let start = html.find(&format!("/assets/{asset}?v=")).unwrap_or_else(|| panic!("{asset} is not linked"));
         let address: String = html[start..].chars().take_while(|c| *c != '"').collect();
         let versioned = client.get(format!("{}{address}", app.address)).send().await.unwrap();
@@ -357,6 +356,16 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     let svg = download(&browser, &driver, "#explore-svg").await;
     assert!(svg.contains("<svg") && svg.contains("polyline"), "the SVG download is the chart");
 
+    // Another input held, at a value outside its law's support: the refusal names it.
+    browser.execute("document.querySelector('#explore-form details').open = true;", vec![]).await.unwrap();
+    click(&browser, "#explore-hold-damping_ratio").await;
+    set_value(&browser, "#explore-held-damping_ratio", "-1").await;
+    click(&browser, "#explore-form button[type=submit]").await;
+    // The worker that runs the operation refuses it; the page shows why above the form.
+    let refused = "Array.from(document.querySelectorAll('#explore-form .error')).some(e => e.textContent.includes('fixed.damping_ratio'))";
+    wait_until(&browser, refused, short).await;
+    click(&browser, "#explore-hold-damping_ratio").await;
+
     // The values under the keyboard's cursor, then a second curve overlaid on the first.
     let chart = browser.find(Locator::Css("#explore-chart svg")).await.unwrap();
     chart.send_keys(&String::from(char::from(Key::Right))).await.unwrap();
@@ -416,6 +425,15 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     wait_until(&browser, "document.querySelector('#metamodel-detail').hidden", short).await;
     let (_, list) = get(&app, "/v1/metamodels").await;
     assert_eq!(list["metamodels"], json!([]));
+
+    // A long calibration, cancelled from its row: the form says so.
+    set_value(&browser, "#calibration-experiments", "200").await;
+    set_value(&browser, "#calibration-duration_s", "900").await;
+    click(&browser, "#calibration-form button[type=submit]").await;
+    wait_until(&browser, "document.querySelector('#operation-list li[data-state=running] .cancel')", long).await;
+    click(&browser, "#operation-list li[data-state=running] .cancel").await;
+    wait_until(&browser, "document.querySelector('#operation-list li[data-state=cancelled]')", long).await;
+    wait_until(&browser, "document.querySelector('#calibration-error').textContent.includes('cancelled')", short).await;
 
     browser.close().await.unwrap();
     drop(driver);

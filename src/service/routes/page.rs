@@ -26,6 +26,7 @@ const CONTENT_SECURITY_POLICY: &str = "default-src 'self'; script-src 'self'; st
 
 /// One embedded file with its type and digest.
 struct Asset {
+    name: &'static str,
     body: &'static str,
     content_type: &'static str,
     /// The first 16 hex digits of the body's SHA-256: the ETag and the version in its address.
@@ -33,26 +34,34 @@ struct Asset {
 }
 
 impl Asset {
-    fn new(body: &'static str, content_type: &'static str) -> Asset {
+    fn new(name: &'static str, body: &'static str, content_type: &'static str) -> Asset {
         let digest = Sha256::digest(body.as_bytes()).iter().take(8).map(|b| format!("{b:02x}")).collect();
-        Asset { body, content_type, digest }
+        Asset { name, body, content_type, digest }
     }
 }
 
-static SCRIPT: LazyLock<Asset> =
-    LazyLock::new(|| Asset::new(include_str!("../page/app.js"), "text/javascript; charset=utf-8"));
-static STYLE: LazyLock<Asset> =
-    LazyLock::new(|| Asset::new(include_str!("../page/style.css"), "text/css; charset=utf-8"));
-static CHARTS: LazyLock<Asset> =
-    LazyLock::new(|| Asset::new(include_str!("../page/charts.js"), "text/javascript; charset=utf-8"));
+const SCRIPT: &str = "text/javascript; charset=utf-8";
+
+/// The page's script (in the order the page loads it) and style sheet.
+static ASSETS: LazyLock<[Asset; 7]> = LazyLock::new(|| {
+    [
+        Asset::new("charts.js", include_str!("../page/charts.js"), SCRIPT),
+        Asset::new("client.js", include_str!("../page/client.js"), SCRIPT),
+        Asset::new("operations.js", include_str!("../page/operations.js"), SCRIPT),
+        Asset::new("models.js", include_str!("../page/models.js"), SCRIPT),
+        Asset::new("analyses.js", include_str!("../page/analyses.js"), SCRIPT),
+        Asset::new("app.js", include_str!("../page/app.js"), SCRIPT),
+        Asset::new("style.css", include_str!("../page/style.css"), "text/css; charset=utf-8"),
+    ]
+});
 
 /// The page with its assets' addresses carrying their digests.
 static INDEX: LazyLock<Asset> = LazyLock::new(|| {
-    let html = include_str!("../page/index.html")
-        .replace("/assets/app.js", &format!("/assets/app.js?v={}", SCRIPT.digest))
-        .replace("/assets/charts.js", &format!("/assets/charts.js?v={}", CHARTS.digest))
-        .replace("/assets/style.css", &format!("/assets/style.css?v={}", STYLE.digest));
-    Asset::new(Box::leak(html.into_boxed_str()), "text/html; charset=utf-8")
+    let html = ASSETS.iter().fold(include_str!("../page/index.html").to_string(), |html, asset| {
+        let address = format!("/assets/{}", asset.name);
+        html.replace(&format!("\"{address}\""), &format!("\"{address}?v={}\"", asset.digest))
+    });
+    Asset::new("index.html", Box::leak(html.into_boxed_str()), "text/html; charset=utf-8")
 });
 
 pub fn router() -> Router<AppState> {
@@ -64,11 +73,8 @@ async fn index(headers: HeaderMap) -> Response {
 }
 
 async fn asset(Path(name): Path<String>, Query(query): Query<HashMap<String, String>>, headers: HeaderMap) -> Response {
-    let asset: &Asset = match name.as_str() {
-        "app.js" => &SCRIPT,
-        "charts.js" => &CHARTS,
-        "style.css" => &STYLE,
-        _ => return ApiError::new(StatusCode::NOT_FOUND, "Not found", format!("no asset `{name}`")).into_response(),
+    let Some(asset) = ASSETS.iter().find(|asset| asset.name == name) else {
+        return ApiError::new(StatusCode::NOT_FOUND, "Not found", format!("no asset `{name}`")).into_response();
     };
     // Only the current version's address may be kept for a year.
     let cache = if query.get("v") == Some(&asset.digest) { "public, max-age=31536000, immutable" } else { "no-cache" };
