@@ -365,6 +365,7 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     let refused = "Array.from(document.querySelectorAll('#explore-form .error')).some(e => e.textContent.includes('fixed.damping_ratio'))";
     wait_until(&browser, refused, short).await;
     click(&browser, "#explore-hold-damping_ratio").await;
+    browser.execute("document.querySelector('#explore-form details').open = false;", vec![]).await.unwrap();
 
     // The values under the keyboard's cursor, then a second curve overlaid on the first.
     let chart = browser.find(Locator::Css("#explore-chart svg")).await.unwrap();
