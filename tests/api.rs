@@ -174,6 +174,17 @@ async fn calibrate_follow_fetch_and_sample() {
     let done = app.wait_for(queued["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(60)).await;
     assert_eq!(done["kind"], "exceedance");
     assert_eq!(done["result"]["probabilities"], curve["probabilities"], "the operation's curve is the same");
+    // What the study refuses is refused before anything is queued: a held input outside its
+    // support, an unknown input, a floor the structure does not have.
+    for (wrong, field) in [
+        (json!({"samples": 30, "fixed": {"damping_ratio": -1}}), "fixed.damping_ratio"),
+        (json!({"samples": 30, "fixed": {"colour": 3}}), "fixed.colour"),
+        (json!({"samples": 30, "response": "drift", "floor": 99}), "floor"),
+    ] {
+        let asked = app.client.post(format!("{}{path}", app.address)).header("prefer", "respond-async").json(&wrong);
+        let (s, ct, body) = problem(asked.send().await.unwrap()).await;
+        assert_problem(s, &ct, &body, 422, field);
+    }
 
     // The annual curve under a Gumbel climate through two return-period speeds, its CSV (one row
     // per threshold, the same numbers), its figure, and the same request as an operation.

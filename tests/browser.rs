@@ -361,8 +361,9 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     click(&browser, "#explore-hold-damping_ratio").await;
     set_value(&browser, "#explore-held-damping_ratio", "-1").await;
     click(&browser, "#explore-form button[type=submit]").await;
-    // The worker that runs the operation refuses it; the page shows why above the form.
-    let refused = "Array.from(document.querySelectorAll('#explore-form .error')).some(e => e.textContent.includes('fixed.damping_ratio'))";
+    // The server refuses it before queuing anything; the page shows why next to the held value.
+    let refused = "document.querySelector('#explore-held-damping_ratio-error').textContent.includes('fixed.damping_ratio') \
+                   && document.querySelector('#explore-held-damping_ratio').getAttribute('aria-invalid') === 'true'";
     wait_until(&browser, refused, short).await;
     click(&browser, "#explore-hold-damping_ratio").await;
     browser.execute("document.querySelector('#explore-form details').open = false;", vec![]).await.unwrap();

@@ -102,6 +102,13 @@ impl ExceedanceRequest {
         Ok(())
     }
 
+    /// The checks that need the study but no sampling (the response's floor or group, the held
+    /// inputs' names and supports), so that a request queued as an operation cannot fail on them.
+    pub fn check_against(&self, problem: &Problem) -> Result<()> {
+        self.response.located(self.floor, self.group, &problem.structure)?;
+        held_inputs(problem, &self.fixed).map(drop)
+    }
+
     /// Samples the metamodel and builds the curve (blocking; parallel over samples).
     pub fn answer(
         &self,

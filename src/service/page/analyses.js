@@ -47,7 +47,7 @@ function showHeldInputs(inputs) {
     const [low, high] = input.calibrated_range;
     const field = document.createElement('div');
     field.className = 'field';
-    field.innerHTML = '<span class="field check"><input type="checkbox"><label></label></span><input type="number" step="any" disabled><span class="hint"></span>';
+    field.innerHTML = '<span class="field check"><input type="checkbox"><label></label></span><input type="number" step="any" disabled><span class="hint"></span><span class="error"></span>';
     const [box, value] = $$('input', field);
     box.id = `explore-hold-${input.name}`;
     value.id = `explore-held-${input.name}`;
@@ -56,6 +56,10 @@ function showHeldInputs(inputs) {
     $('label', field).setAttribute('for', box.id);
     $('label', field).textContent = `Hold ${input.name}`;
     value.setAttribute('aria-label', `${input.name} held at`);
+    const error = $('.error', field);
+    error.id = `explore-held-${input.name}-error`;
+    error.dataset.errorFor = value.name;
+    value.setAttribute('aria-describedby', error.id);
     value.min = low;
     value.max = high;
     value.value = Number(((low + high) / 2).toPrecision(4));

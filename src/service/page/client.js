@@ -84,7 +84,10 @@ function clearErrors(form) {
   $$('[aria-invalid]', form).forEach((node) => node.removeAttribute('aria-invalid'));
 }
 
-/** Shows a problem's field errors next to the fields `prefix-<field>` and the rest above the form. */
+/**
+ * Shows a problem's field errors next to their fields (the slot `[data-error-for=<field>]` of a
+ * generated field, else `prefix-<field>-error`) and the rest above the form.
+ */
 function showProblem(form, prefix, error) {
   const general = $(`#${prefix}-error`);
   if (!(error instanceof ApiProblem)) {
@@ -95,8 +98,9 @@ function showProblem(form, prefix, error) {
   const unplaced = [];
   for (const { field, detail } of fields) {
     const name = field.split(/[.[]/)[0];
-    const slot = $(`#${prefix}-${name}-error`);
-    const input = $(`#${prefix}-${name}`);
+    const generated = $(`[data-error-for="${CSS.escape(field)}"]`, form);
+    const slot = generated || $(`#${prefix}-${name}-error`);
+    const input = generated ? $(`[name="${CSS.escape(field)}"]`, form) : $(`#${prefix}-${name}`);
     if (slot) {
       slot.textContent = detail.startsWith(field) ? detail : `${field}: ${detail}`;
       if (input) input.setAttribute('aria-invalid', 'true');

@@ -144,6 +144,7 @@ async fn exceedance_curve(
 ) -> Result<HttpResponse, ApiError> {
     request.check(&state.config)?;
     let loaded = load(&state, &id).await?;
+    request.check_against(&loaded.1)?;
     let storms = request.samples;
     let queued = {
         let (id, request) = (id.clone(), request.clone());
