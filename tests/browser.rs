@@ -395,9 +395,24 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     browser.screenshot().await.map(|png| std::fs::write(artefact("page.png"), png).unwrap()).unwrap();
 
     // The annual curve with return levels, fragility over speed, Sobol indices.
+    // A site climate needs both speeds (the page says so), speeds that grow with the return
+    // period (the server says so, next to the climate), then answers with the limit's β.
     set_value(&browser, "#hazard-samples", "500").await;
+    set_value(&browser, "#hazard-speed-50", "31").await;
+    click(&browser, "#hazard-form button[type=submit]").await;
+    wait_until(&browser, "document.querySelector('#hazard-climate-error').textContent.includes('both')", short).await;
+    set_value(&browser, "#hazard-speed-700", "29").await;
+    click(&browser, "#hazard-form button[type=submit]").await;
+    wait_until(&browser, "document.querySelector('#hazard-climate-error').textContent.includes('grow')", short).await;
+    set_value(&browser, "#hazard-speed-700", "33").await;
+    set_value(&browser, "#hazard-limit", "0.2").await;
     click(&browser, "#hazard-form button[type=submit]").await;
     wait_until(&browser, "document.querySelectorAll('#hazard-table tbody tr').length >= 3", long).await;
+    let notes = text_of(&browser, "#hazard-notes").await + &text_of(&browser, "#hazard-reliability").await;
+    assert!(
+        notes.to_lowercase().contains("gumbel") && notes.contains("At the limit 0.2 m") && notes.contains("β ="),
+        "{notes}"
+    );
     set_value(&browser, "#fragility-samples", "20").await;
     set_value(&browser, "#fragility-thresholds", "0.4, 0.6").await;
     click(&browser, "#fragility-form button[type=submit]").await;

@@ -189,10 +189,14 @@ async function hazard(event) {
   event.preventDefault();
   const form = event.target;
   const request = analysisRequest(form, 'hazard');
-  if (!request) return;
+  if (!request || !hazardFields(form, request)) return;
   const answer = await runAnalysis(form, 'hazard', 'hazard', request);
   if (!answer) return;
   const unit = UNITS[answer.response.kind];
+  const reliability = answer.reliability;
+  $('#hazard-reliability').textContent = reliability
+    ? `At the limit ${format(reliability.limit)} ${unit}: ${format(reliability.annual_probability)} a year [${format(reliability.lower)}, ${format(reliability.upper)}], β = ${reliability.beta === null ? (reliability.annual_probability > 0 ? '−∞' : '+∞') : format(reliability.beta)}.`
+    : '';
   $('#hazard-chart').replaceChildren(Charts.lines({
     title: `Annual exceedance: ${responseLabel(answer)}`, xLabel: `peak x (${unit})`, yLabel: 'annual probability of exceedance', yLog: true,
     series: [{ name: `${answer.samples} storms`, x: answer.thresholds, y: answer.annual_probability, lower: answer.lower, upper: answer.upper }],
@@ -206,6 +210,25 @@ async function hazard(event) {
     return row;
   }));
   $('#hazard-notes').textContent = `Calibrated wind speeds ${format(answer.calibrated_wind_range[0])}–${format(answer.calibrated_wind_range[1])} m/s; the climate's probability outside them ${format(answer.climate_beyond_calibrated_range)}. Climate: ${describeMarginal(answer.climate)}.`;
+}
+
+/**
+ * The hazard form's own fields into `request`: the site climate from two return-period speeds
+ * (both or neither) and the limit; false after showing what is wrong.
+ */
+function hazardFields(form, request) {
+  const errors = [];
+  const speeds = ['50', '700'].map((years) => [years, numberField($(`#hazard-speed-${years}`), errors, false)]);
+  const given = speeds.filter(([, speed]) => speed !== undefined);
+  if (given.length === 1) errors.push({ field: 'climate', detail: 'give both speeds, or neither for the metamodel\'s wind law' });
+  if (given.length === 2) request.climate = { return_period_speeds: Object.fromEntries(given) };
+  const limit = numberField($('#hazard-limit'), errors, false);
+  if (limit !== undefined) request.limit = limit;
+  if (errors.length) {
+    showProblem(form, 'hazard', new ApiProblem(422, { title: 'Not sent', detail: 'some fields need attention', errors }));
+    return false;
+  }
+  return true;
 }
 
 async function fragility(event) {

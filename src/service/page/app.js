@@ -3,14 +3,22 @@
 // event stream, so nothing on the page waits on a long request.
 'use strict';
 
-async function loadEverything() {
+/** Loads a list, its failure shown in the list's own error line (cleared by a success); whether it loaded. */
+async function reload(list, load) {
+  const error = $(`#${list}-error`);
   try {
-    await loadPresets();
-    await loadOperations();
-    await loadMetamodels();
-  } catch (error) {
-    $('#calibration-error').textContent = error.message;
+    await load();
+    error.textContent = '';
+    return true;
+  } catch (failure) {
+    error.textContent = failure.message;
+    return false;
   }
+}
+
+/** The presets, operations and metamodels, stopping at the first failure (a missing key, as a rule). */
+async function loadEverything() {
+  (await reload('calibration', loadPresets)) && (await reload('operations', loadOperations)) && (await reload('metamodels', loadMetamodels));
 }
 
 function start() {
@@ -18,8 +26,8 @@ function start() {
   setUpAnalysisForms();
   $('#calibration-preset').addEventListener('change', showPreset);
   $('#calibration-form').addEventListener('submit', calibrate);
-  $('#operations-refresh').addEventListener('click', () => loadOperations().catch((e) => { $('#calibration-error').textContent = e.message; }));
-  $('#metamodels-refresh').addEventListener('click', () => loadMetamodels().catch((e) => { $('#calibration-error').textContent = e.message; }));
+  $('#operations-refresh').addEventListener('click', () => reload('operations', loadOperations));
+  $('#metamodels-refresh').addEventListener('click', () => reload('metamodels', loadMetamodels));
   $('#validation-form').addEventListener('submit', validate);
   $('#metamodel-delete').addEventListener('click', deleteMetamodel);
   $('#explore-form').addEventListener('submit', explore);
