@@ -27,6 +27,8 @@ use super::response::damper_below;
 use crate::dynamics::power;
 use crate::error::{Error, Result};
 use crate::problem::{MAX_MODES, Problem};
+#[cfg(target_arch = "x86_64")]
+use crate::surrogate::Avx512Isa;
 use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
 use exact::ExactSteps;
 use gates::Gates;
@@ -250,6 +252,42 @@ struct MotionPeaks {
 
 impl MotionSink for MotionPeaks {
     fn take(&mut self, _first: usize, outputs: &[Lanes], inputs: &[Lanes]) {
+        // The accelerations' reduction on AVX-512 where the processor has it: every step works on
+        // eight lanes, one register instead of two (a fifth less time for a profile, measured);
+        // the combinations alone gained nothing from it and keep the baseline code.
+        #[cfg(target_arch = "x86_64")]
+        if self.linear.is_some()
+            && let Some(isa) = Avx512Isa::detect()
+        {
+            // SAFETY: `isa` was detected, so the processor has the features the function is
+            // compiled for.
+            return unsafe { take_avx512(isa, self, outputs, inputs) };
+        }
+        self.take_block(outputs, inputs);
+    }
+
+    fn finish(&mut self) -> Vec<Lanes> {
+        self.finish_storm()
+    }
+}
+
+/// [`MotionPeaks::take_block`] compiled for AVX-512: everything it calls for the accelerations is
+/// `#[inline(always)]`, so that it is compiled for these features too (a function that is not
+/// inlined keeps the baseline code).
+///
+/// # Safety
+/// The processor must have AVX-512F and FMA, which `isa` proves.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,fma")]
+unsafe fn take_avx512(_isa: Avx512Isa, peaks: &mut MotionPeaks, outputs: &[Lanes], inputs: &[Lanes]) {
+    peaks.take_block(outputs, inputs);
+}
+
+impl MotionPeaks {
+    /// A block of outputs and inputs: the velocities and linear parts of its steps, then its
+    /// responses into their running peaks.
+    #[inline(always)]
+    fn take_block(&mut self, outputs: &[Lanes], inputs: &[Lanes]) {
         let modes = self.modes;
         let count = outputs.len() / modes;
         let at = |k: usize| &outputs[k * modes..(k + 1) * modes];
@@ -285,7 +323,7 @@ impl MotionSink for MotionPeaks {
         self.reduce();
     }
 
-    fn finish(&mut self) -> Vec<Lanes> {
+    fn finish_storm(&mut self) -> Vec<Lanes> {
         let modes = self.modes;
         self.velocities.clear();
         if self.seen > 0 {
@@ -308,9 +346,7 @@ impl MotionSink for MotionPeaks {
             })
             .collect()
     }
-}
 
-impl MotionPeaks {
     /// The step whose velocities were pushed last, from its outputs `y` and inputs `q`: kept for
     /// the combinations, and its modal linear parts ℓ_m.
     #[inline(always)]
@@ -382,6 +418,7 @@ impl MotionPeaks {
     }
 
     /// The block's responses into their running peaks.
+    #[inline(always)]
     fn reduce(&mut self) {
         if !self.stepped.is_empty() {
             self.reduce_stepped();
@@ -446,6 +483,7 @@ fn ranges(values: &[Lanes], modes: usize) -> [[Lanes; 2]; MAX_MODES] {
 /// chunk its steps likewise, computed exactly until the bound falls below the running peak: the
 /// largest accelerations come first and rule out the rest. A chunk's bound comes from the modes'
 /// chunk maxima (|L| ≤ Σ_m |φ_m| max|ℓ_m|), so a floor looks at the steps of few chunks only.
+#[inline(always)]
 fn reduce_acceleration(
     lanes: &LaneModels,
     steps: &Steps,

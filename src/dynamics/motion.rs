@@ -13,7 +13,7 @@
 //! are computed alike.
 
 use super::damper::Dampers;
-use super::power::power;
+use super::power::sign_power;
 use crate::structure::Modes;
 use crate::wind::ModalForces;
 
@@ -101,7 +101,7 @@ impl<'a> SampleModel<'a> {
             for &(m, g) in &self.map[d] {
                 velocity.iter_mut().zip(&motion.velocities[m]).for_each(|(v, y)| *v += g * y);
             }
-            velocity.iter_mut().for_each(|v| *v = c * power(v.abs(), alpha).copysign(*v));
+            velocity.iter_mut().for_each(|v| *v = c * sign_power(*v, alpha));
             for &(m, g) in &self.map[d] {
                 damper_modal[m].iter_mut().zip(&velocity).for_each(|(total, f)| *total += g * f);
             }

@@ -58,6 +58,12 @@ pub fn power(x: f64, alpha: f64) -> f64 {
     if x < f64::MIN_POSITIVE { 0.0 } else { taylor * scale }
 }
 
+/// The damper law's shape sign(v)|v|^α, with [`power`]'s accuracy.
+#[inline(always)]
+pub fn sign_power(v: f64, alpha: f64) -> f64 {
+    power(v.abs(), alpha).copysign(v)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -17,6 +17,9 @@ pub mod phases;
 mod progress;
 mod refine;
 
+/// Proof that the processor has AVX-512F and FMA, for the loops compiled for it.
+#[cfg(target_arch = "x86_64")]
+pub(crate) use batch::Avx512Isa;
 pub use batch::Workspace as BatchWorkspace;
 pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};

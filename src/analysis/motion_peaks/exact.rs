@@ -2,7 +2,7 @@
 //! block and lane and shared by every floor that looks at that step.
 
 use super::LaneModels;
-use crate::dynamics::power;
+use crate::dynamics::sign_power;
 use crate::problem::MAX_MODES;
 use crate::surrogate::{LANES, Lanes};
 
@@ -30,6 +30,7 @@ impl ExactSteps {
 
     /// Step i's modal damper forces in lane l, computed (with `forces` as scratch) unless a floor
     /// already did.
+    #[inline(always)]
     pub(super) fn modal_forces(
         &mut self,
         i: usize,
@@ -46,7 +47,7 @@ impl ExactSteps {
                 *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
             }
             for force in forces.iter_mut() {
-                *force = power(force.abs(), lanes.exponent).copysign(*force);
+                *force = sign_power(*force, lanes.exponent);
             }
             for (m, g) in self.modal[key][..modes].iter_mut().enumerate() {
                 *g = forces.iter().zip(&lanes.map).zip(&lanes.coefficients).map(|((f, g), c)| g[m] * c[l] * f).sum();

@@ -70,11 +70,13 @@ impl Gates {
 
     /// An upper bound on P S^α in lane l without a power: the lowest tangent (α < 1, concave);
     /// infinite where there are no tangents (α ≥ 1).
+    #[inline(always)]
     pub(super) fn damper_bound(&self, l: usize, speed: f64) -> f64 {
         self.offsets.iter().zip(&self.slopes).fold(f64::INFINITY, |m, (o, s)| m.min(s[l].mul_add(speed, o[l])))
     }
 
     /// The lanes (bit l) whose peak a chunk with these |L| and S bounds could beat.
+    #[inline(always)]
     pub(super) fn lanes_that_may_beat(&self, linear: &Lanes, speed: &Lanes) -> u8 {
         let mut damper = [f64::INFINITY; LANES];
         for (offset, slope) in self.offsets.iter().zip(&self.slopes) {
@@ -113,6 +115,7 @@ impl Gate {
         true
     }
 
+    #[inline(always)]
     pub(super) fn may_beat(&self, linear: f64, speed: f64) -> bool {
         if linear >= self.reach || linear.is_nan() {
             return true;

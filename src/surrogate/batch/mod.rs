@@ -31,6 +31,8 @@ mod sink;
 pub use super::lanes::{LANES, Lanes};
 pub use inputs::Workspace;
 pub use samples::{BatchSample, ModeProgram};
+#[cfg(target_arch = "x86_64")]
+pub(crate) use simd::Avx512Isa;
 pub use sink::{Divergence, Sink};
 
 use super::narx::{NarxTerm, rest_output};

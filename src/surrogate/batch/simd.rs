@@ -76,7 +76,9 @@ impl Vector for Lanes {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(super) use x86::{Avx2, Avx2Isa, Avx512, Avx512Isa};
+pub(crate) use x86::Avx512Isa;
+#[cfg(target_arch = "x86_64")]
+pub(super) use x86::{Avx2, Avx2Isa, Avx512};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
