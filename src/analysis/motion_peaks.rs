@@ -430,11 +430,13 @@ impl MotionPeaks {
             self.chunk_speed.clear();
             for first in (0..count).step_by(CHUNK) {
                 let range = first * modes..(first + CHUNK).min(count) * modes;
+                let (chunk_linear, chunk_speed) = (&linear[range.clone()], &self.velocities[range]);
                 for m in 0..modes {
                     let (mut most_linear, mut most_speed) = ([0.0f64; LANES], [0.0f64; LANES]);
-                    for (x, v) in
-                        linear[range.clone()].iter().zip(&self.velocities[range.clone()]).skip(m).step_by(modes)
-                    {
+                    // Whole steps and an index rather than `step_by`, whose per-item state kept
+                    // the maxima out of registers (an eighth of the sink's time, measured).
+                    for (x, v) in chunk_linear.chunks_exact(modes).zip(chunk_speed.chunks_exact(modes)) {
+                        let (x, v) = (&x[m], &v[m]);
                         (0..LANES).for_each(|l| {
                             most_linear[l] = most_linear[l].max(x[l].abs());
                             most_speed[l] = most_speed[l].max(v[l].abs());
