@@ -422,6 +422,34 @@ async fn a_restart_takes_the_job_up_again() {
     second.stop().await;
 }
 
+/// A database locked for longer than the lease leaves the worker unsure whether the job is still
+/// its own: it stops and gives the job back to the queue, where it is taken up again. Only a client
+/// may have a job recorded as cancelled.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_lease_in_doubt_gives_the_job_back_instead_of_cancelling_it() {
+    use sqlx::Connection;
+    let db = database("lease-in-doubt");
+    let app = spawn_app(&db).await;
+    let op: Value = app
+        .post("/v1/calibrations", json!({"experiments": 24, "duration_s": 120, "seed": 5}))
+        .await
+        .json()
+        .await
+        .unwrap();
+    let id = op["id"].as_str().unwrap().to_string();
+    app.wait_for(&id, &["running"], Duration::from_secs(30)).await;
+    // Longer than the lease (2 s) plus SQLite's busy timeout (5 s): a heartbeat fails after the
+    // lease has run out.
+    let mut lock = sqlx::SqliteConnection::connect(&format!("sqlite://{}", db.display())).await.unwrap();
+    sqlx::raw_sql("BEGIN IMMEDIATE").execute(&mut lock).await.unwrap();
+    tokio::time::sleep(Duration::from_secs(8)).await;
+    sqlx::raw_sql("ROLLBACK").execute(&mut lock).await.unwrap();
+    let done = app.wait_for(&id, &["succeeded", "failed", "cancelled"], Duration::from_secs(180)).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    assert!(done["attempts"].as_i64().unwrap() >= 2, "{done}");
+    app.stop().await;
+}
+
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn api_keys_and_cors() {
     let app = spawn_app_with(&database("auth"), vec!["s3cret".into()], vec!["https://office.example".into()]).await;

@@ -35,8 +35,12 @@ const EXPERIMENTS_PER_TASK: usize = 10;
 struct Supervision {
     /// Latest progress, saved at the next heartbeat.
     progress: Mutex<Option<Progress>>,
-    /// Set by the supervisor on a cancel request or shutdown; read by the work between steps.
+    /// Set by the supervisor on a cancel request, a shutdown or a lease in doubt; read by the work
+    /// between steps.
     cancel: AtomicBool,
+    /// Whether a client asked for the cancellation. Only then is the job recorded as cancelled: a
+    /// shutdown or a lease in doubt gives the job back to the queue for another worker.
+    requested: AtomicBool,
 }
 
 impl Observer for Supervision {
@@ -354,6 +358,7 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
                         Ok(Some(cancel)) => {
                             lease.renewed();
                             if cancel {
+                                supervision.requested.store(true, Ordering::Relaxed);
                                 supervision.cancel.store(true, Ordering::Relaxed);
                             }
                         }
@@ -381,12 +386,12 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         Ok((JobOutput::Answer(body), _)) => {
             lease.persist("an answer", || store.finish(&id, owner, "succeeded", None, Some(&body))).await.map(|_| ())
         }
-        Err(Error::Cancelled) if state.draining.load(Ordering::Relaxed) => {
-            lease.persist("releasing a job", || store.release(&id, owner)).await
-        }
-        Err(Error::Cancelled) => {
+        Err(Error::Cancelled) if supervision.requested.load(Ordering::Relaxed) => {
             lease.persist("a cancellation", || store.finish(&id, owner, "cancelled", None, None)).await.map(|_| ())
         }
+        // A shutdown or a lease in doubt: the job goes back to the queue (a no-op when another
+        // worker has taken it meanwhile, since the release is guarded by the owner).
+        Err(Error::Cancelled) => lease.persist("releasing a job", || store.release(&id, owner)).await,
         Err(error) => {
             let reason = error.to_string();
             lease.persist("a failure", || store.finish(&id, owner, "failed", Some(&reason), None)).await.map(|_| ())
