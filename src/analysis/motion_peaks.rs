@@ -35,6 +35,9 @@ use gates::Gates;
 
 /// Steps whose bound is taken together before any of them is looked at one by one.
 const CHUNK: usize = 32;
+/// Steps of a chunk's part, whose bound is taken in a chunk that is looked at before its steps are:
+/// most steps of a looked-at chunk cannot beat the peak, and whole parts of them are passed over.
+const PART: usize = 8;
 /// Relative inflation of the bound against rounding.
 const BOUND_MARGIN: f64 = 1e-9;
 
@@ -95,6 +98,8 @@ pub fn motion_sink(
         linear: accelerations.then(Vec::new),
         chunk_linear: Vec::new(),
         chunk_speed: Vec::new(),
+        part_linear: Vec::new(),
+        part_speed: Vec::new(),
         forces: vec![0.0; problem.structure.dampers.len()],
         exact: ExactSteps::default(),
         scratch: Scratch::default(),
@@ -117,6 +122,11 @@ struct LaneModels {
     coefficients: Vec<Lanes>,
     map: Vec<Vec<f64>>,
     velocity_map: Vec<Vec<f64>>,
+    /// The same laid out for the exact steps' loops over the dampers, which then run in vector
+    /// registers: G_dm s_m and G_dm mode-major (`[m][d]`), c_d lane-major (`[l][d]`).
+    velocity_columns: Vec<Vec<f64>>,
+    map_columns: Vec<Vec<f64>>,
+    lane_coefficients: Vec<Vec<f64>>,
     exponent: f64,
 }
 
@@ -131,6 +141,9 @@ impl LaneModels {
             coefficients: Vec::new(),
             map: Vec::new(),
             velocity_map: Vec::new(),
+            velocity_columns: Vec::new(),
+            map_columns: Vec::new(),
+            lane_coefficients: Vec::new(),
             exponent: problem.damper_exponent,
         };
         for (lane, x) in inputs.iter().enumerate() {
@@ -157,6 +170,12 @@ impl LaneModels {
                 to[lane] = c;
             }
         }
+        let columns = |rows: &[Vec<f64>]| -> Vec<Vec<f64>> {
+            (0..modes).map(|m| rows.iter().map(|row| row[m]).collect()).collect()
+        };
+        lanes.velocity_columns = columns(&lanes.velocity_map);
+        lanes.map_columns = columns(&lanes.map);
+        lanes.lane_coefficients = (0..LANES).map(|l| lanes.coefficients.iter().map(|c| c[l]).collect()).collect();
         Ok(lanes)
     }
 }
@@ -241,6 +260,9 @@ struct MotionPeaks {
     /// chunk is ruled out by Σ_m |φ_m| max|ℓ_m| and Σ_m K_m max|ŷ'_m| without looking at its steps.
     chunk_linear: Vec<Lanes>,
     chunk_speed: Vec<Lanes>,
+    /// The same per part of [`PART`] steps, `[p·M + m]`.
+    part_linear: Vec<Lanes>,
+    part_speed: Vec<Lanes>,
     /// The block's processed steps' scaled outputs ŷ_m, `[i·M + m]`, kept when a combination is
     /// tracked.
     outputs: Option<Vec<Lanes>>,
@@ -426,32 +448,18 @@ impl MotionPeaks {
         if let Some(linear) = &mut self.linear {
             let modes = self.modes;
             let count = self.velocities.len() / modes;
-            self.chunk_linear.clear();
-            self.chunk_speed.clear();
-            for first in (0..count).step_by(CHUNK) {
-                let range = first * modes..(first + CHUNK).min(count) * modes;
-                let (chunk_linear, chunk_speed) = (&linear[range.clone()], &self.velocities[range]);
-                for m in 0..modes {
-                    let (mut most_linear, mut most_speed) = ([0.0f64; LANES], [0.0f64; LANES]);
-                    // Whole steps and an index rather than `step_by`, whose per-item state kept
-                    // the maxima out of registers (an eighth of the sink's time, measured).
-                    for (x, v) in chunk_linear.chunks_exact(modes).zip(chunk_speed.chunks_exact(modes)) {
-                        let (x, v) = (&x[m], &v[m]);
-                        (0..LANES).for_each(|l| {
-                            most_linear[l] = most_linear[l].max(x[l].abs());
-                            most_speed[l] = most_speed[l].max(v[l].abs());
-                        });
-                    }
-                    self.chunk_linear.push(most_linear);
-                    self.chunk_speed.push(most_speed);
-                }
-            }
+            magnitudes_by_group(&mut self.part_linear, linear, PART, modes);
+            magnitudes_by_group(&mut self.part_speed, &self.velocities, PART, modes);
+            magnitudes_by_group(&mut self.chunk_linear, &self.part_linear, CHUNK / PART, modes);
+            magnitudes_by_group(&mut self.chunk_speed, &self.part_speed, CHUNK / PART, modes);
             self.exact.next_block(count);
             let steps = Steps {
                 velocities: &self.velocities,
                 linear,
                 chunk_linear: &self.chunk_linear,
                 chunk_speed: &self.chunk_speed,
+                part_linear: &self.part_linear,
+                part_speed: &self.part_speed,
                 modes,
             };
             for Tracked { target, best } in &mut self.targets {
@@ -464,6 +472,24 @@ impl MotionPeaks {
             linear.clear();
         }
         self.velocities.clear();
+    }
+}
+
+/// Per group of `steps` steps of `values` (`[i·M + m]`) and mode, the largest magnitude, every
+/// lane: `maxima[g·M + m]`.
+#[inline(always)]
+fn magnitudes_by_group(maxima: &mut Vec<Lanes>, values: &[Lanes], steps: usize, modes: usize) {
+    maxima.clear();
+    for group in values.chunks(steps * modes) {
+        for m in 0..modes {
+            let mut most = [0.0f64; LANES];
+            // Whole steps and an index rather than `step_by`, whose per-item state kept the
+            // maxima out of registers (an eighth of the sink's time, measured).
+            for x in group.chunks_exact(modes) {
+                (0..LANES).for_each(|l| most[l] = most[l].max(x[m][l].abs()));
+            }
+            maxima.push(most);
+        }
     }
 }
 
@@ -484,7 +510,8 @@ fn ranges(values: &[Lanes], modes: usize) -> [[Lanes; 2]; MAX_MODES] {
 /// Per lane, the block's chunks of [`CHUNK`] steps in decreasing order of their bound, and in a
 /// chunk its steps likewise, computed exactly until the bound falls below the running peak: the
 /// largest accelerations come first and rule out the rest. A chunk's bound comes from the modes'
-/// chunk maxima (|L| ≤ Σ_m |φ_m| max|ℓ_m|), so a floor looks at the steps of few chunks only.
+/// chunk maxima (|L| ≤ Σ_m |φ_m| max|ℓ_m|), so a floor looks at the steps of few chunks only, and
+/// in those at the steps of the parts whose own maxima do not rule them out.
 #[inline(always)]
 fn reduce_acceleration(
     lanes: &LaneModels,
@@ -495,7 +522,7 @@ fn reduce_acceleration(
 ) {
     let alpha = lanes.exponent;
     let Floor { shape, modal, bound, k, gates } = floor;
-    let Steps { velocities, linear, chunk_linear, chunk_speed, modes } = *steps;
+    let Steps { velocities, linear, chunk_linear, chunk_speed, part_linear, part_speed, modes } = *steps;
     // (1 + ε)(|L| + P S^α), the power spared by the lowest tangent where there are tangents.
     let most = |gates: &Gates, l: usize, linear: f64, speed: f64| {
         let damper = gates.damper_bound(l, speed);
@@ -539,14 +566,25 @@ fn reduce_acceleration(
             gates.open_to(l, *best, bound[l], alpha);
             let gate = &gates.lanes[l];
             candidates.clear();
-            for i in first..(first + CHUNK).min(count) {
+            for part in (first..(first + CHUNK).min(count)).step_by(PART) {
+                let p = part / PART * modes;
                 let (mut x, mut s) = (0.0, 0.0);
                 for m in 0..modes {
-                    x = shape[m].mul_add(linear[i * modes + m][l], x);
-                    s = k[m][l].mul_add(velocities[i * modes + m][l].abs(), s);
+                    x = shape[m].abs().mul_add(part_linear[p + m][l], x);
+                    s = k[m][l].mul_add(part_speed[p + m][l], s);
                 }
-                if gate.may_beat(x.abs(), s) {
-                    candidates.push((most(gates, l, x.abs(), s), i, x));
+                if !gate.may_beat(x, s) {
+                    continue;
+                }
+                for i in part..(part + PART).min(count) {
+                    let (mut x, mut s) = (0.0, 0.0);
+                    for m in 0..modes {
+                        x = shape[m].mul_add(linear[i * modes + m][l], x);
+                        s = k[m][l].mul_add(velocities[i * modes + m][l].abs(), s);
+                    }
+                    if gate.may_beat(x.abs(), s) {
+                        candidates.push((most(gates, l, x.abs(), s), i, x));
+                    }
                 }
             }
             candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
@@ -569,6 +607,8 @@ struct Steps<'a> {
     linear: &'a [Lanes],
     chunk_linear: &'a [Lanes],
     chunk_speed: &'a [Lanes],
+    part_linear: &'a [Lanes],
+    part_speed: &'a [Lanes],
     modes: usize,
 }
 

@@ -3,6 +3,7 @@
 
 use super::LaneModels;
 use crate::dynamics::sign_power;
+use crate::linalg::dot;
 use crate::problem::MAX_MODES;
 use crate::surrogate::{LANES, Lanes};
 
@@ -42,15 +43,20 @@ impl ExactSteps {
         let modes = lanes.inverse_masses.len();
         let key = i * LANES + l;
         if self.stamps[key] != self.block {
+            // Mode-major over the dampers, so that every loop runs a vector register of dampers
+            // at a time (damper-major, the sums over dampers were chains of dependent additions).
             let v = &velocities[i * modes..(i + 1) * modes];
-            for (force, g) in forces.iter_mut().zip(&lanes.velocity_map) {
-                *force = g.iter().zip(v).map(|(g, v)| g * v[l]).sum();
+            forces.fill(0.0);
+            for (column, v) in lanes.velocity_columns.iter().zip(v) {
+                for (force, g) in forces.iter_mut().zip(column) {
+                    *force = g.mul_add(v[l], *force);
+                }
             }
-            for force in forces.iter_mut() {
-                *force = sign_power(*force, lanes.exponent);
+            for (force, c) in forces.iter_mut().zip(&lanes.lane_coefficients[l]) {
+                *force = c * sign_power(*force, lanes.exponent);
             }
-            for (m, g) in self.modal[key][..modes].iter_mut().enumerate() {
-                *g = forces.iter().zip(&lanes.map).zip(&lanes.coefficients).map(|((f, g), c)| g[m] * c[l] * f).sum();
+            for (g, column) in self.modal[key][..modes].iter_mut().zip(&lanes.map_columns) {
+                *g = dot(column, forces);
             }
             self.stamps[key] = self.block;
         }
