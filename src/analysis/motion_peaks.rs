@@ -35,8 +35,8 @@ use gates::Gates;
 
 /// Steps whose bound is taken together before any of them is looked at one by one.
 const CHUNK: usize = 32;
-/// Steps of a chunk's part, whose bound is taken in a chunk that is looked at before its steps are:
-/// most steps of a looked-at chunk cannot beat the peak, and whole parts of them are passed over.
+/// Steps of a part of a chunk: in a chunk that is looked at, each part's bound is taken before its
+/// steps are, since most steps of such a chunk cannot beat the peak and whole parts are passed over.
 const PART: usize = 8;
 /// Relative inflation of the bound against rounding.
 const BOUND_MARGIN: f64 = 1e-9;
