@@ -21,6 +21,7 @@
 
 mod exact;
 mod gates;
+mod lanes;
 
 use super::Response;
 use super::response::damper_below;
@@ -32,6 +33,7 @@ use crate::surrogate::Avx512Isa;
 use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
 use exact::ExactSteps;
 use gates::Gates;
+use lanes::LaneModels;
 
 /// Steps whose bound is taken together before any of them is looked at one by one.
 const CHUNK: usize = 32;
@@ -104,80 +106,6 @@ pub fn motion_sink(
         exact: ExactSteps::default(),
         scratch: Scratch::default(),
     }))
-}
-
-/// The reduced models of a batch's samples, lane-major, with the blocks' scales folded in: the
-/// sink works on the scaled outputs ŷ_m and inputs q̂_m as the free run gives them, and on the
-/// scaled velocities ŷ'_m (y'_m = s_m ŷ'_m), so that nothing is converted step by step.
-struct LaneModels {
-    /// 1/M_m (for h_d), r_m/M_m, 2ζω_m s_m and ω_m² s_m per mode, every lane (s_m, r_m: the
-    /// output and input scales).
-    inverse_masses: Vec<Lanes>,
-    load_gains: Vec<Lanes>,
-    damping: Vec<Lanes>,
-    stiffness: Vec<Lanes>,
-    /// Per damper its coefficient c_d in every lane, G_dm per mode and G_dm s_m, the damper's
-    /// velocity per scaled modal velocity (the same in every lane: the shapes are fixed across
-    /// samples).
-    coefficients: Vec<Lanes>,
-    map: Vec<Vec<f64>>,
-    velocity_map: Vec<Vec<f64>>,
-    /// The same laid out for the exact steps' loops over the dampers, which then run in vector
-    /// registers: G_dm s_m and G_dm mode-major (`[m][d]`), c_d lane-major (`[l][d]`).
-    velocity_columns: Vec<Vec<f64>>,
-    map_columns: Vec<Vec<f64>>,
-    lane_coefficients: Vec<Vec<f64>>,
-    exponent: f64,
-}
-
-impl LaneModels {
-    fn new(problem: &Problem, inputs: &[&[f64]], scales: &ModalScales) -> Result<Self> {
-        let modes = problem.modes.count();
-        let mut lanes = LaneModels {
-            inverse_masses: vec![[0.0; LANES]; modes],
-            load_gains: vec![[0.0; LANES]; modes],
-            damping: vec![[0.0; LANES]; modes],
-            stiffness: vec![[0.0; LANES]; modes],
-            coefficients: Vec::new(),
-            map: Vec::new(),
-            velocity_map: Vec::new(),
-            velocity_columns: Vec::new(),
-            map_columns: Vec::new(),
-            lane_coefficients: Vec::new(),
-            exponent: problem.damper_exponent,
-        };
-        for (lane, x) in inputs.iter().enumerate() {
-            let p = problem.parameters(x)?;
-            let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p)?);
-            for m in 0..modes.count() {
-                let omega = modes.frequencies[m];
-                lanes.inverse_masses[m][lane] = 1.0 / modes.modal_masses[m];
-                lanes.load_gains[m][lane] = scales.inputs[m] / modes.modal_masses[m];
-                lanes.damping[m][lane] = 2.0 * p.damping_ratio * omega * scales.outputs[m];
-                lanes.stiffness[m][lane] = omega * omega * scales.outputs[m];
-            }
-            if lane == 0 {
-                lanes.map = dampers
-                    .modal_map(modes.shapes.as_ref())
-                    .iter()
-                    .map(|row| row.iter().map(|g| g.1).collect())
-                    .collect();
-                lanes.coefficients = vec![[0.0; LANES]; dampers.coefficients.len()];
-                lanes.velocity_map =
-                    lanes.map.iter().map(|g| g.iter().zip(&scales.outputs).map(|(g, s)| g * s).collect()).collect();
-            }
-            for (to, &c) in lanes.coefficients.iter_mut().zip(&dampers.coefficients) {
-                to[lane] = c;
-            }
-        }
-        let columns = |rows: &[Vec<f64>]| -> Vec<Vec<f64>> {
-            (0..modes).map(|m| rows.iter().map(|row| row[m]).collect()).collect()
-        };
-        lanes.velocity_columns = columns(&lanes.velocity_map);
-        lanes.map_columns = columns(&lanes.map);
-        lanes.lane_coefficients = (0..LANES).map(|l| lanes.coefficients.iter().map(|c| c[l]).collect()).collect();
-        Ok(lanes)
-    }
 }
 
 /// What is tracked.
