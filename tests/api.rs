@@ -397,20 +397,26 @@ async fn cancellation_stops_a_running_calibration() {
     app.stop().await;
 }
 
-/// Stop the server in the middle of a calibration, start it again on the same file: the job is
-/// taken up again and finishes; nothing stored is lost.
-#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
-async fn a_restart_takes_the_job_up_again() {
-    let db = database("restart");
-    let first = spawn_app(&db).await;
-    let op: Value = first
+/// A calibration long enough to be interrupted (24 experiments of 120 s), once it runs: its id.
+async fn running_calibration(app: &TestApp) -> String {
+    let op: Value = app
         .post("/v1/calibrations", json!({"experiments": 24, "duration_s": 120, "seed": 5}))
         .await
         .json()
         .await
         .unwrap();
     let id = op["id"].as_str().unwrap().to_string();
-    first.wait_for(&id, &["running"], Duration::from_secs(30)).await;
+    app.wait_for(&id, &["running"], Duration::from_secs(30)).await;
+    id
+}
+
+/// Stop the server in the middle of a calibration, start it again on the same file: the job is
+/// taken up again and finishes; nothing stored is lost.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_restart_takes_the_job_up_again() {
+    let db = database("restart");
+    let first = spawn_app(&db).await;
+    let id = running_calibration(&first).await;
     tokio::time::sleep(Duration::from_millis(500)).await;
     first.stop().await;
     let second = spawn_app(&db).await;
@@ -430,14 +436,7 @@ async fn a_lease_in_doubt_gives_the_job_back_instead_of_cancelling_it() {
     use sqlx::Connection;
     let db = database("lease-in-doubt");
     let app = spawn_app(&db).await;
-    let op: Value = app
-        .post("/v1/calibrations", json!({"experiments": 24, "duration_s": 120, "seed": 5}))
-        .await
-        .json()
-        .await
-        .unwrap();
-    let id = op["id"].as_str().unwrap().to_string();
-    app.wait_for(&id, &["running"], Duration::from_secs(30)).await;
+    let id = running_calibration(&app).await;
     // Longer than the lease (2 s) plus SQLite's busy timeout (5 s): a heartbeat fails after the
     // lease has run out.
     let mut lock = sqlx::SqliteConnection::connect(&format!("sqlite://{}", db.display())).await.unwrap();
