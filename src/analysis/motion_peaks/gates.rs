@@ -8,7 +8,8 @@ use crate::surrogate::{LANES, Lanes};
 /// (1 + ε)(|L| + P S^α) > best, told without a power per test: |L| is placed on a grid of
 /// [`GATE_BINS`] intervals of best/(1 + ε), and S compared with the speed that the interval's top
 /// leaves room for, ((1 − (j + 1)/B) best/((1 + ε) P))^{1/α}. Conservative (it lets through a
-/// little more than the bound would), and recomputed only when the peak rises.
+/// little more than the bound would), and recomputed only when the peak rises: with one power,
+/// since every speed of the table is (best/((1 + ε) P))^{1/α} times a fraction of [`Fractions`].
 #[derive(Clone, Copy)]
 pub(super) struct Gate {
     best: f64,
@@ -26,6 +27,7 @@ pub(super) struct Gate {
 /// For α ≥ 1 (convex, no tangent above it) every lane is let through to its gate.
 pub(super) struct Gates {
     pub(super) lanes: [Gate; LANES],
+    fractions: Fractions,
     reach: Lanes,
     offsets: [Lanes; TANGENTS.len()],
     slopes: [Lanes; TANGENTS.len()],
@@ -39,6 +41,7 @@ impl Default for Gates {
         let pass = [f64::INFINITY; LANES];
         Gates {
             lanes: [Gate::default(); LANES],
+            fractions: Fractions::default(),
             reach: [0.0; LANES],
             offsets: [pass; TANGENTS.len()],
             slopes: [[0.0; LANES]; TANGENTS.len()],
@@ -49,17 +52,21 @@ impl Default for Gates {
 impl Gates {
     /// Lane l's gate and tangents for its running peak `best` and the bound's P and α.
     pub(super) fn open_to(&mut self, l: usize, best: f64, p: f64, alpha: f64) {
-        if !self.lanes[l].open_to(best, p, alpha) {
+        if best == self.lanes[l].best {
             return;
         }
+        if self.fractions.alpha != alpha {
+            self.fractions = Fractions::new(alpha);
+        }
+        let fractions = &self.fractions;
+        let speed = self.lanes[l].open_to(best, p, alpha, fractions);
         let reach = self.lanes[l].reach;
         self.reach[l] = reach;
-        for (t, f) in TANGENTS.iter().enumerate() {
+        for (t, (f, fraction)) in TANGENTS.iter().zip(&fractions.tangents).enumerate() {
             let (offset, slope) = if p == 0.0 {
                 (0.0, 0.0)
             } else if alpha < 1.0 && reach > 0.0 {
-                let speed = (f * reach / p).powf(1.0 / alpha);
-                ((1.0 - alpha) * f * reach, alpha * f * reach / speed)
+                ((1.0 - alpha) * f * reach, alpha * f * reach / (speed * fraction))
             } else {
                 (f64::INFINITY, 0.0)
             };
@@ -91,7 +98,33 @@ impl Gates {
 }
 
 /// Intervals of |L| in a [`Gate`].
-const GATE_BINS: usize = 16;
+const GATE_BINS: usize = 64;
+
+/// The powers 1/α of the fractions of the running peak that a [`Gate`]'s speeds and the tangents'
+/// touching speeds leave to the dampers, (1 − j/B)^{1/α} and f_t^{1/α}: computed once per damper
+/// law, so that opening a gate takes one power instead of one per interval and tangent.
+#[derive(Clone, Copy)]
+struct Fractions {
+    alpha: f64,
+    bins: [f64; GATE_BINS + 1],
+    tangents: [f64; TANGENTS.len()],
+}
+
+impl Default for Fractions {
+    fn default() -> Self {
+        Fractions { alpha: f64::NAN, bins: [0.0; GATE_BINS + 1], tangents: [0.0; TANGENTS.len()] }
+    }
+}
+
+impl Fractions {
+    fn new(alpha: f64) -> Self {
+        Fractions {
+            alpha,
+            bins: std::array::from_fn(|j| (1.0 - j as f64 / GATE_BINS as f64).powf(1.0 / alpha)),
+            tangents: TANGENTS.map(|f| f.powf(1.0 / alpha)),
+        }
+    }
+}
 
 impl Default for Gate {
     fn default() -> Self {
@@ -100,19 +133,17 @@ impl Default for Gate {
 }
 
 impl Gate {
-    /// The gate for a running peak `best` and the bound's P and α; whether it changed.
-    fn open_to(&mut self, best: f64, p: f64, alpha: f64) -> bool {
-        if best == self.best {
-            return false;
-        }
+    /// The gate for a running peak `best` and the bound's P and α: the speed (reach/P)^{1/α} at
+    /// which the dampers alone could reach the peak.
+    fn open_to(&mut self, best: f64, p: f64, alpha: f64, fractions: &Fractions) -> f64 {
         self.best = best;
         self.reach = best / (1.0 + BOUND_MARGIN);
         self.bins_per_reach = GATE_BINS as f64 / self.reach;
-        for (j, slow) in self.slow.iter_mut().enumerate() {
-            let room = (1.0 - j as f64 / GATE_BINS as f64) * self.reach;
-            *slow = if p > 0.0 { (room / p).powf(1.0 / alpha) } else { f64::INFINITY };
+        let speed = if p > 0.0 { (self.reach / p).powf(1.0 / alpha) } else { f64::INFINITY };
+        for (slow, fraction) in self.slow.iter_mut().zip(&fractions.bins) {
+            *slow = if p > 0.0 { speed * fraction } else { f64::INFINITY };
         }
-        true
+        speed
     }
 
     #[inline(always)]
