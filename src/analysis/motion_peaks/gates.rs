@@ -141,7 +141,13 @@ impl Gate {
         self.bins_per_reach = GATE_BINS as f64 / self.reach;
         let speed = if p > 0.0 { (self.reach / p).powf(1.0 / alpha) } else { f64::INFINITY };
         for (slow, fraction) in self.slow.iter_mut().zip(&fractions.bins) {
-            *slow = if p > 0.0 { speed * fraction } else { f64::INFINITY };
+            // The top interval leaves no room (fraction 0): a speed of 0 even where `speed`
+            // overflowed, where the product would be NaN and let nothing through.
+            *slow = match (p > 0.0, *fraction == 0.0) {
+                (false, _) => f64::INFINITY,
+                (true, true) => 0.0,
+                (true, false) => speed * fraction,
+            };
         }
         speed
     }
