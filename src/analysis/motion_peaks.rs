@@ -478,8 +478,8 @@ fn reduce_acceleration(
     ));
     let Scratch { coarse, chunks, candidates } = scratch;
     // Per window of 64 chunks, each lane's chunks that may beat its peak as the bits of a word,
-    // rather than a scan of every chunk's lanes per lane (the scan took about 6 % of a profile's
-    // time, measured).
+    // rather than a scan of every chunk's lanes per lane (the function holding that scan took
+    // 5.6 % of a profile's time, a quarter of it the test of the lane's bit; measured).
     for (w, window) in coarse.chunks(WINDOW).enumerate() {
         let mut lane_chunks = [0u64; LANES];
         for (c, (lanes, _, _)) in window.iter().enumerate() {
