@@ -502,7 +502,6 @@ fn reduce_acceleration(
                     break;
                 }
                 gates.open_to(l, *best, bound[l], alpha);
-                candidates.clear();
                 let bound_of = |linear: f64, speed: f64| most(gates, l, linear, speed);
                 chunk_candidates(steps, (shape, k), (&gates.lanes[l], bound_of), (l, first), candidates);
                 candidates.sort_unstable_by(|a, b| b.0.total_cmp(&a.0));
@@ -519,7 +518,7 @@ fn reduce_acceleration(
     }
 }
 
-/// Into `candidates`, (bound, step, L) of the steps of lane l's chunk from step `first` that the
+/// In `candidates` (cleared first), (bound, step, L) of the steps of lane l's chunk from step `first` that the
 /// gate lets through, with `bound` their bound on |a|: the parts of [`PART`] steps are ruled out
 /// by their maxima first.
 #[inline(always)]
@@ -532,6 +531,7 @@ fn chunk_candidates(
 ) {
     let Steps { velocities, linear, part_linear, part_speed, modes, .. } = *steps;
     let count = velocities.len() / modes;
+    candidates.clear();
     for part in (first..(first + CHUNK).min(count)).step_by(PART) {
         let p = part / PART * modes;
         let (mut x, mut s) = (0.0, 0.0);
@@ -556,7 +556,8 @@ fn chunk_candidates(
 }
 
 /// A block's processed steps as an acceleration's reduction reads them, every lane: the modal
-/// velocities ŷ'_m and linear parts ℓ_m, `[i·M + m]`, and their chunk maxima `[c·M + m]`.
+/// velocities ŷ'_m and linear parts ℓ_m, `[i·M + m]`, and their maxima of magnitude per chunk,
+/// `[c·M + m]`, and per part, `[p·M + m]`.
 struct Steps<'a> {
     velocities: &'a [Lanes],
     linear: &'a [Lanes],
