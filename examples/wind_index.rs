@@ -9,7 +9,8 @@
 
 use clap::Parser;
 use windmeta::analysis::{Draws, OnDivergence, Response, WIND_SPEED, metamodel_sensitivity, peaks_at};
-use windmeta::surrogate::{Metamodel, Silent};
+use windmeta::progress::Silent;
+use windmeta::surrogate::Metamodel;
 use windmeta::uncertainty::{monte_carlo, rng_from_seed};
 
 #[derive(Debug, Parser)]
@@ -29,14 +30,14 @@ struct Args {
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let args = Args::parse();
     let metamodel = Metamodel::from_json(&std::fs::read_to_string(&args.model)?)?;
-    let problem = metamodel.problem()?;
-    let roof = Response::Displacement { floor: problem.structure.floors() };
-    let sobol = metamodel_sensitivity(&metamodel, &problem, roof, args.samples, 1, 0.95, &Silent)?;
+    let study = metamodel.study()?;
+    let roof = Response::Displacement { floor: study.structure.floors() };
+    let sobol = metamodel_sensitivity(&metamodel, &study, roof, args.samples, 1, 0.95, &Silent)?;
     let wind = sobol.indices.iter().find(|i| i.name == WIND_SPEED).ok_or("the model has no random wind speed")?;
 
-    let column = problem.inputs.index_of(WIND_SPEED)?;
-    let law = *problem.inputs.marginal(WIND_SPEED)?;
-    let others = monte_carlo(&problem.inputs, args.storms, &mut rng_from_seed(2));
+    let column = study.inputs.index_of(WIND_SPEED)?;
+    let law = *study.inputs.marginal(WIND_SPEED)?;
+    let others = monte_carlo(&study.inputs, args.storms, &mut rng_from_seed(2));
     let mut rows = Vec::with_capacity(args.speeds * args.storms);
     for k in 0..args.speeds {
         let v = law.quantile((k as f64 + 0.5) / args.speeds as f64);
@@ -47,7 +48,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         }));
     }
     let storms: Vec<usize> = (0..rows.len()).collect();
-    let draws = Draws { problem: &problem, rows: &rows, storms: &storms, seed: 3, on_divergence: OnDivergence::Fail };
+    let draws = Draws { study: &study, rows: &rows, storms: &storms, seed: 3, on_divergence: OnDivergence::Fail };
     let peaks = peaks_at(&metamodel, &draws, roof, &Silent)?;
     let n = args.storms as f64;
     let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;

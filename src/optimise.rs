@@ -6,9 +6,9 @@
 //! Hand-written: the crates that offer them (argmin, levenberg-marquardt) bring their own matrix
 //! and problem abstractions for what is here a few dozen lines over `Vec<f64>`.
 
-use crate::cancel::{Cancel, check};
 use crate::error::Result;
 use crate::linalg::{cholesky, cholesky_solve};
+use crate::progress::{Observer, check};
 
 /// The normal equations of a least-squares problem at a point: JᵀJ (row-major, n×n), Jᵀr and the
 /// sum of squared residuals r.
@@ -25,14 +25,14 @@ pub struct NormalEquations {
 pub fn levenberg_marquardt(
     x: Vec<f64>,
     normal_equations: impl Fn(&[f64]) -> Option<NormalEquations>,
-    cancel: &dyn Cancel,
+    observer: &dyn Observer,
 ) -> Result<Vec<f64>> {
     let n = x.len();
     let mut x = x;
     let Some(mut current) = normal_equations(&x) else { return Ok(x) };
     let mut lambda = 1e-3;
     for _ in 0..200 {
-        check(cancel)?;
+        check(observer)?;
         let NormalEquations { jtj, jtr, sum_of_squares } = &current;
         let mut a = jtj.clone();
         for i in 0..n {
@@ -69,7 +69,7 @@ pub fn levenberg_marquardt(
 /// Nelder-Mead from `x` (reflection 1, expansion 2, contraction ½, shrink ½; MATLAB's fminsearch
 /// start simplex x + 5 % per coordinate), stopping when the simplex has collapsed to relative
 /// 10⁻¹⁰ in both coordinates and values, or after 200·n iterations.
-pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, cancel: &dyn Cancel) -> Result<Vec<f64>> {
+pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, observer: &dyn Observer) -> Result<Vec<f64>> {
     let n = x.len();
     let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
     simplex.push((x.clone(), f(&x)));
@@ -84,7 +84,7 @@ pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, cancel: &dyn Cancel) 
     };
     let along = |c: &[f64], x: &[f64], t: f64| -> Vec<f64> { c.iter().zip(x).map(|(c, x)| c + t * (x - c)).collect() };
     for _ in 0..200 * n {
-        check(cancel)?;
+        check(observer)?;
         simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
         let best = simplex[0].1;
         let spread_f = simplex.iter().map(|s| (s.1 - best).abs()).fold(0.0, f64::max);
@@ -126,13 +126,13 @@ pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, cancel: &dyn Cancel) 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cancel::Never;
+    use crate::progress::Silent;
 
     /// Rosenbrock's valley, minimum 0 at (1, 1), from the textbook start (−1.2, 1).
     #[test]
     fn nelder_mead_finds_the_rosenbrock_minimum() {
         let rosenbrock = |x: &[f64]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
-        let x = nelder_mead(vec![-1.2, 1.0], rosenbrock, &Never).unwrap();
+        let x = nelder_mead(vec![-1.2, 1.0], rosenbrock, &Silent).unwrap();
         assert!((x[0] - 1.0).abs() < 1e-4 && (x[1] - 1.0).abs() < 1e-4, "{x:?}");
     }
 
@@ -157,7 +157,7 @@ mod tests {
             }
             Some(NormalEquations { jtj, jtr, sum_of_squares })
         };
-        let x = levenberg_marquardt(vec![1.0, 0.0], normal_equations, &Never).unwrap();
+        let x = levenberg_marquardt(vec![1.0, 0.0], normal_equations, &Silent).unwrap();
         assert!((x[0] - 2.0).abs() < 1e-8 && (x[1] + 0.5).abs() < 1e-8, "{x:?}");
     }
 }

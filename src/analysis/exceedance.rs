@@ -4,8 +4,10 @@
 use super::Response;
 use super::motion_peaks::motion_sink;
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::surrogate::{BatchInput, BatchWorkspace, LANES, Metamodel, ModalScales, Observer, Progress, Reduction};
+use crate::progress::{Observer, Progress};
+use crate::simd::LANES;
+use crate::study::Study;
+use crate::surrogate::{BatchInput, BatchWorkspace, Metamodel, ModalScales, Reduction};
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use crate::wind::{self, ForceSource};
 use rayon::prelude::*;
@@ -118,7 +120,7 @@ pub const MAX_SAMPLES: usize = 1_000_000;
 /// (seed, k). A diverging free run fails the request rather than being dropped.
 pub fn metamodel_peaks(
     metamodel: &Metamodel,
-    problem: &Problem,
+    study: &Study,
     inputs: &InputModel,
     samples: usize,
     seed: u64,
@@ -128,7 +130,7 @@ pub fn metamodel_peaks(
     check_samples(samples)?;
     let rows = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..samples).collect();
-    let draws = Draws { problem, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
+    let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
     peaks_at(metamodel, &draws, response, observer)
 }
 
@@ -144,7 +146,7 @@ pub fn check_samples(samples: usize) -> Result<()> {
 /// the run seeded with `seed` its wind is drawn from (two rows with the same stream see the same
 /// storm phases, which common random numbers and Sobol's pick-freeze designs rely on).
 pub struct Draws<'a> {
-    pub problem: &'a Problem,
+    pub study: &'a Study,
     pub rows: &'a [Vec<f64>],
     pub storms: &'a [usize],
     pub seed: u64,
@@ -176,7 +178,7 @@ pub fn peak_sets_at(
     observer: &dyn Observer,
 ) -> Result<Vec<Vec<f64>>> {
     let members: Vec<Vec<Response>> =
-        responses.iter().map(|r| r.members(&draws.problem.structure)).collect::<Result<_>>()?;
+        responses.iter().map(|r| r.members(&draws.study.structure)).collect::<Result<_>>()?;
     let sets = floor_peak_sets_at(metamodel, draws, &members.concat(), observer)?;
     let largest_of_members = |row: Vec<f64>| -> Vec<f64> {
         let mut rest = &row[..];
@@ -202,15 +204,15 @@ fn floor_peak_sets_at(
     responses: &[Response],
     observer: &dyn Observer,
 ) -> Result<Vec<Vec<f64>>> {
-    let Draws { problem, rows, storms, seed, on_divergence } = *draws;
+    let Draws { study, rows, storms, seed, on_divergence } = *draws;
     assert_eq!(rows.len(), storms.len(), "one storm per row");
     let path = metamodel.calibration.options.wind;
     let weights = match responses {
-        [response] => response.modal_weights(&metamodel.modes.shapes, &problem.structure)?,
+        [response] => response.modal_weights(&metamodel.modes.shapes, &study.structure)?,
         _ => None,
     };
     let sink_for = |inputs: &[&[f64]], scales: &ModalScales| {
-        motion_sink(problem, &metamodel.modes.shapes, responses, inputs, scales)
+        motion_sink(study, &metamodel.modes.shapes, responses, inputs, scales)
     };
     let reduction = match &weights {
         Some(weights) => Reduction::Combination(weights),
@@ -222,7 +224,7 @@ fn floor_peak_sets_at(
         .zip(storms.par_chunks(LANES))
         .enumerate()
         .map_init(
-            || (wind::Workspace::default(), BatchWorkspace::default()),
+            || (wind::TransformWorkspace::default(), BatchWorkspace::default()),
             |(wind_workspace, batch_workspace), (chunk, (xs, keys))| {
                 if observer.cancelled() {
                     return Err(Error::Cancelled);
@@ -230,7 +232,7 @@ fn floor_peak_sets_at(
                 let storms = xs
                     .iter()
                     .zip(keys)
-                    .map(|(x, &k)| Ok(problem.sample_storm(x, path, seed, k, wind_workspace)?.1))
+                    .map(|(x, &k)| Ok(study.sample_storm(x, path, seed, k, wind_workspace)?.1))
                     .collect::<Result<Vec<_>>>()?;
                 let batch: Vec<BatchInput> = xs
                     .iter()
@@ -239,9 +241,9 @@ fn floor_peak_sets_at(
                     .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
                     .collect();
                 let peaks = match on_divergence {
-                    OnDivergence::Fail => metamodel.peaks(problem, &batch, &reduction, batch_workspace)?,
+                    OnDivergence::Fail => metamodel.peaks(study, &batch, &reduction, batch_workspace)?,
                     OnDivergence::Exceed => metamodel
-                        .peaks_or_divergence(problem, &batch, &reduction, batch_workspace)?
+                        .peaks_or_divergence(study, &batch, &reduction, batch_workspace)?
                         .into_iter()
                         .map(|peaks| peaks.unwrap_or_else(|| vec![f64::INFINITY; responses.len()]))
                         .collect(),

@@ -5,11 +5,12 @@
 use super::exceedance::{check_confidence, check_samples, clopper_pearson};
 use super::hazard::WIND_SPEED;
 use super::{Draws, OnDivergence, Response, check_thresholds, peaks_at};
-use crate::cancel::Never;
 use crate::error::{Error, Result};
 use crate::optimise::nelder_mead;
-use crate::problem::Problem;
-use crate::surrogate::{Metamodel, Observer};
+use crate::progress::Observer;
+use crate::progress::Silent;
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
@@ -177,7 +178,7 @@ fn fit_lognormal(speeds: &[f64], counts: &[usize], n: usize, confidence: f64) ->
         .enumerate()
         .min_by(|a, b| (*a.1 as f64 - n as f64 / 2.0).abs().total_cmp(&(*b.1 as f64 - n as f64 / 2.0).abs()))
         .map_or(0, |(j, _)| j);
-    let best = nelder_mead(vec![speeds[nearest].ln(), 0.3f64.ln()], nll, &Never).ok()?;
+    let best = nelder_mead(vec![speeds[nearest].ln(), 0.3f64.ln()], nll, &Silent).ok()?;
     let (a, b) = (best[0], best[1]);
     if !(a.is_finite() && b.is_finite()) {
         return None;
@@ -208,15 +209,15 @@ fn fit_lognormal(speeds: &[f64], counts: &[usize], n: usize, confidence: f64) ->
 /// The fragility curves of a metamodel's peak `response`.
 pub fn metamodel_fragility(
     metamodel: &Metamodel,
-    problem: &Problem,
+    study: &Study,
     response: Response,
     options: &FragilityOptions,
     observer: &dyn Observer,
 ) -> Result<Fragility> {
-    response.check(&problem.structure)?;
-    let calibrated = metamodel.calibrated_range(problem, WIND_SPEED)?;
-    fragility(&problem.inputs, options, calibrated, |rows, storms| {
-        let draws = Draws { problem, rows, storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
+    response.check(&study.structure)?;
+    let calibrated = metamodel.calibrated_range(study, WIND_SPEED)?;
+    fragility(&study.inputs, options, calibrated, |rows, storms| {
+        let draws = Draws { study, rows, storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
         peaks_at(metamodel, &draws, response, observer)
     })
 }

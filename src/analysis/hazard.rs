@@ -6,8 +6,9 @@ use super::exceedance::{Draws, OnDivergence, automatic_thresholds, check_confide
 use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
 use super::{Response, check_thresholds};
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::surrogate::{Metamodel, Observer};
+use crate::progress::Observer;
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use crate::uncertainty::{InputModel, Marginal, monte_carlo, rng_from_seed};
 use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
@@ -280,16 +281,16 @@ fn reliability(limit: f64, e: Estimate) -> Reliability {
 /// wind-speed marginal, every other input keeps its law.
 pub fn metamodel_hazard(
     metamodel: &Metamodel,
-    problem: &Problem,
+    study: &Study,
     response: Response,
     options: &HazardOptions,
     observer: &dyn Observer,
 ) -> Result<HazardCurve> {
-    response.check(&problem.structure)?;
-    let calibrated = metamodel.calibrated_range(problem, WIND_SPEED)?;
-    hazard_curve(&problem.inputs, options, calibrated, |rows, first| {
+    response.check(&study.structure)?;
+    let calibrated = metamodel.calibrated_range(study, WIND_SPEED)?;
+    hazard_curve(&study.inputs, options, calibrated, |rows, first| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
-        let draws = Draws { problem, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
+        let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
         peaks_at(metamodel, &draws, response, observer)
     })
 }

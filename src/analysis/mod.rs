@@ -2,7 +2,6 @@
 //! annual curves and return levels under a wind climate, fragility curves, Sobol indices, and the
 //! validation of a metamodel against the reference.
 
-mod checked;
 mod climate;
 mod exceedance;
 mod fragility;
@@ -15,9 +14,9 @@ mod reference;
 mod response;
 mod sobol;
 mod strata;
+mod validated_responses;
 mod validation;
 
-pub use checked::ResponseValidation;
 pub use climate::{ClimateCoverage, ClimateSpec};
 pub use exceedance::{
     Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD, MAX_THRESHOLDS, OnDivergence, automatic_thresholds,
@@ -37,4 +36,5 @@ pub use reference::{reference_history, reference_peak};
 pub use response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_GRAVITY};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;
+pub use validated_responses::ResponseValidation;
 pub use validation::{ValidationReport, validate};

@@ -27,10 +27,9 @@ use super::Response;
 use super::response::damper_below;
 use crate::dynamics::power;
 use crate::error::{Error, Result};
-use crate::problem::{MAX_MODES, Problem};
-#[cfg(target_arch = "x86_64")]
-use crate::surrogate::Avx512Isa;
-use crate::surrogate::{LANES, Lanes, ModalScales, MotionSink};
+use crate::simd::{Kernel, LANES, Lanes, Vector, run_widest};
+use crate::study::{MAX_MODES, Study};
+use crate::surrogate::{ModalScales, MotionSink};
 use exact::ExactSteps;
 use gates::{Gate, Gates};
 use lanes::LaneModels;
@@ -50,27 +49,27 @@ const BOUND_MARGIN: f64 = 1e-9;
 /// whose blocks have `scales`, the floors' modal weights read from `shapes[m][floor]`: one peak per
 /// response and lane.
 pub fn motion_sink(
-    problem: &Problem,
+    study: &Study,
     shapes: &[Vec<f64>],
     responses: &[Response],
     inputs: &[&[f64]],
     scales: &ModalScales,
 ) -> Result<Box<dyn MotionSink>> {
-    let lanes = LaneModels::new(problem, inputs, scales)?;
+    let lanes = LaneModels::new(study, inputs, scales)?;
     let targets: Vec<Tracked> = responses
         .iter()
         .map(|response| {
             let target = match *response {
                 Response::Acceleration { floor } => {
-                    response.check(&problem.structure)?;
+                    response.check(&study.structure)?;
                     Target::acceleration(&lanes, &shapes.iter().map(|s| s[floor - 1]).collect::<Vec<_>>())
                 }
                 Response::DamperForce { floor } => {
-                    response.check(&problem.structure)?;
-                    Target::DamperForce { damper: damper_below(&problem.structure, floor)? }
+                    response.check(&study.structure)?;
+                    Target::DamperForce { damper: damper_below(&study.structure, floor)? }
                 }
                 _ => {
-                    let weights = response.modal_weights(shapes, &problem.structure)?.ok_or_else(|| {
+                    let weights = response.modal_weights(shapes, &study.structure)?.ok_or_else(|| {
                         Error::Internal(format!("the {} is not one floor's combination", response.describe()))
                     })?;
                     let mut offsets = [0.0; LANES];
@@ -88,7 +87,7 @@ pub fn motion_sink(
     let accelerations = responses.iter().any(|r| matches!(r, Response::Acceleration { .. }));
     let combinations = targets.iter().any(|t| matches!(t.target, Target::Combination { .. }));
     Ok(Box::new(MotionPeaks {
-        time_step: problem.storm.time_step,
+        time_step: study.storm.time_step,
         modes: lanes.inverse_masses.len(),
         lanes,
         stepped: (0..targets.len()).filter(|&t| !matches!(targets[t].target, Target::Acceleration { .. })).collect(),
@@ -105,7 +104,7 @@ pub fn motion_sink(
         chunk_speed: Vec::new(),
         part_linear: Vec::new(),
         part_speed: Vec::new(),
-        forces: vec![0.0; problem.structure.dampers.len()],
+        forces: vec![0.0; study.structure.dampers.len()],
         exact: ExactSteps::default(),
         scratch: Scratch::default(),
     }))
@@ -205,18 +204,14 @@ struct MotionPeaks {
 
 impl MotionSink for MotionPeaks {
     fn take(&mut self, _first: usize, outputs: &[Lanes], inputs: &[Lanes]) {
-        // The accelerations' reduction on AVX-512 where the processor has it: every step works on
+        // The accelerations' reduction on the widest vectors: on AVX-512 every step works on
         // eight lanes, one register instead of two (a fifth less time for a profile, measured);
         // the combinations alone gained nothing from it and keep the baseline code.
-        #[cfg(target_arch = "x86_64")]
-        if self.linear.is_some()
-            && let Some(isa) = Avx512Isa::detect()
-        {
-            // SAFETY: `isa` was detected, so the processor has the features the function is
-            // compiled for.
-            return unsafe { take_avx512(isa, self, outputs, inputs) };
+        if self.linear.is_some() {
+            run_widest(TakeBlock { peaks: self, outputs, inputs });
+        } else {
+            self.take_block(outputs, inputs);
         }
-        self.take_block(outputs, inputs);
     }
 
     fn finish(&mut self) -> Vec<Lanes> {
@@ -224,16 +219,20 @@ impl MotionSink for MotionPeaks {
     }
 }
 
-/// [`MotionPeaks::take_block`] compiled for AVX-512: everything it calls for the accelerations is
-/// `#[inline(always)]`, so that it is compiled for these features too (a function that is not
-/// inlined keeps the baseline code).
-///
-/// # Safety
-/// The processor must have AVX-512F and FMA, which `isa` proves.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f,fma")]
-unsafe fn take_avx512(_isa: Avx512Isa, peaks: &mut MotionPeaks, outputs: &[Lanes], inputs: &[Lanes]) {
-    peaks.take_block(outputs, inputs);
+/// [`MotionPeaks::take_block`] as a kernel, compiled for each instruction set: everything it calls
+/// for the accelerations is `#[inline(always)]`, so that it is compiled for those features too.
+struct TakeBlock<'a> {
+    peaks: &'a mut MotionPeaks,
+    outputs: &'a [Lanes],
+    inputs: &'a [Lanes],
+}
+
+impl Kernel for TakeBlock<'_> {
+    type Output = ();
+    #[inline(always)]
+    fn run<V: Vector>(self, _: V::Isa) {
+        self.peaks.take_block(self.outputs, self.inputs);
+    }
 }
 
 impl MotionPeaks {

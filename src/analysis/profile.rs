@@ -6,8 +6,9 @@ use super::exceedance::{Draws, OnDivergence, check_confidence, check_samples, pe
 use super::peaks::quantile;
 use super::{Response, ResponseKind};
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::surrogate::{Metamodel, Observer};
+use crate::progress::Observer;
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{Binomial, DiscreteCDF};
@@ -45,10 +46,10 @@ pub struct ProfileSamples {
 }
 
 /// The responses of kind `kind` at every floor where the building has one, bottom up.
-pub fn profile_responses(kind: ResponseKind, problem: &Problem) -> Result<Vec<Response>> {
-    let floors = problem.structure.floors();
+pub fn profile_responses(kind: ResponseKind, study: &Study) -> Result<Vec<Response>> {
+    let floors = study.structure.floors();
     let present: Vec<Response> =
-        (1..=floors).map(|floor| kind.at_floor(floor)).filter(|r| r.check(&problem.structure).is_ok()).collect();
+        (1..=floors).map(|floor| kind.at_floor(floor)).filter(|r| r.check(&study.structure).is_ok()).collect();
     if present.is_empty() {
         return Err(Error::invalid("response", format!("the structure has no floor with a {}", kind.name())));
     }
@@ -60,7 +61,7 @@ pub fn profile_responses(kind: ResponseKind, problem: &Problem) -> Result<Vec<Re
 /// a floor's peaks are those of the exceedance request of that floor with the same seed.
 pub fn metamodel_profiles(
     metamodel: &Metamodel,
-    problem: &Problem,
+    study: &Study,
     inputs: &InputModel,
     samples: usize,
     seed: u64,
@@ -68,10 +69,10 @@ pub fn metamodel_profiles(
     observer: &dyn Observer,
 ) -> Result<ProfileSamples> {
     check_samples(samples)?;
-    let responses = profile_responses(kind, problem)?;
+    let responses = profile_responses(kind, study)?;
     let rows = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..samples).collect();
-    let draws = Draws { problem, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
+    let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
     let peaks = peak_sets_at(metamodel, &draws, &responses, observer)?;
     Ok(ProfileSamples { responses, peaks })
 }

@@ -8,25 +8,25 @@ use super::response::{damper_below, envelope};
 use super::{Response, ResponseView};
 use crate::dynamics::SampleModel;
 use crate::error::{Error, Result};
-use crate::problem::{Problem, StormRun};
+use crate::study::{StormRun, Study};
 
 /// The peak of `response` in the reference run `run` of inputs `x`.
-pub fn reference_peak(problem: &Problem, x: &[f64], run: &StormRun, response: Response) -> Result<f64> {
-    Ok(reference_history(problem, x, run, response)?.iter().fold(0.0, |m, v| m.max(v.abs())))
+pub fn reference_peak(study: &Study, x: &[f64], run: &StormRun, response: Response) -> Result<f64> {
+    Ok(reference_history(study, x, run, response)?.iter().fold(0.0, |m, v| m.max(v.abs())))
 }
 
 /// The history of `response` in the reference run `run` of inputs `x`; a damper group's envelope
 /// step by step.
-pub fn reference_history(problem: &Problem, x: &[f64], run: &StormRun, response: Response) -> Result<Vec<f64>> {
-    let structure = &problem.structure;
+pub fn reference_history(study: &Study, x: &[f64], run: &StormRun, response: Response) -> Result<Vec<f64>> {
+    let structure = &study.structure;
     let members = response.members(structure)?;
     let Some(floor) = response.floor() else {
-        return envelope(members.into_iter().map(|m| reference_history(problem, x, run, m)));
+        return envelope(members.into_iter().map(|m| reference_history(study, x, run, m)));
     };
-    let p = problem.parameters(x)?;
-    let dampers = problem.dampers(&p)?;
+    let p = study.parameters(x)?;
+    let dampers = study.dampers(&p)?;
     if let (Some(motion), Some(forces)) = (&run.modal_motion, &run.modal_forces) {
-        let modes = problem.sample_modes(&p);
+        let modes = study.sample_modes(&p);
         let shapes: Vec<Vec<f64>> =
             (0..modes.count()).map(|m| (0..structure.floors()).map(|f| modes.shapes[(f, m)]).collect()).collect();
         let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
@@ -52,7 +52,7 @@ pub fn reference_history(problem: &Problem, x: &[f64], run: &StormRun, response:
             let d = damper_below(structure, floor)?;
             let axial =
                 |t: usize| -> f64 { dampers.floor_weights[d].iter().map(|&(f, w)| w * full.velocities[f][t]).sum() };
-            (0..problem.storm.steps()).map(|t| dampers.force(d, axial(t))).collect()
+            (0..study.storm.steps()).map(|t| dampers.force(d, axial(t))).collect()
         }
     })
 }

@@ -14,8 +14,9 @@
 use super::exceedance::{check_confidence, check_samples};
 use super::{Draws, OnDivergence, Response, peaks_at};
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::surrogate::{Metamodel, Observer};
+use crate::progress::Observer;
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use crate::uncertainty::{InputModel, Marginal, monte_carlo, rng_from_seed};
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
@@ -157,21 +158,16 @@ pub fn sobol_indices(
 /// The Sobol indices of a metamodel's peak `response` over its input model and the storm.
 pub fn metamodel_sensitivity(
     metamodel: &Metamodel,
-    problem: &Problem,
+    study: &Study,
     response: Response,
     samples: usize,
     seed: u64,
     confidence: f64,
     observer: &dyn Observer,
 ) -> Result<Sensitivity> {
-    response.check(&problem.structure)?;
-    sobol_indices(&problem.inputs, samples, seed, confidence, |rows, storms| {
-        peaks_at(
-            metamodel,
-            &Draws { problem, rows, storms, seed, on_divergence: OnDivergence::Fail },
-            response,
-            observer,
-        )
+    response.check(&study.structure)?;
+    sobol_indices(&study.inputs, samples, seed, confidence, |rows, storms| {
+        peaks_at(metamodel, &Draws { study, rows, storms, seed, on_divergence: OnDivergence::Fail }, response, observer)
     })
 }
 

@@ -2,17 +2,18 @@
 //! 4.3.2): the same inputs and the same storm through both, then errors, peak correlation (Fig. 6)
 //! and the exceedance curves of the peaks (Fig. 7).
 
-use super::checked::{CheckedPeaks, ResponseValidation, compare};
 use super::exceedance::{ExceedanceCurve, automatic_thresholds, exceedance_curve, max_exceedance_gap};
 use super::response::ResponseView;
+use super::validated_responses::{CheckedPeaks, ResponseValidation, compare};
 use super::{Response, pearson, quantile};
 use crate::dynamics::{ModalMotion, SampleModel, integrate_reduced};
 use crate::error::{Error, Result};
-use crate::problem::Problem;
+use crate::progress::{Observer, Progress, check};
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use crate::surrogate::narx::relative_error;
-use crate::surrogate::{Metamodel, Observer, Progress};
 use crate::uncertainty::{InputModel, Marginal, monte_carlo, rng_from_seed};
-use crate::wind::Workspace;
+use crate::wind::TransformWorkspace;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -69,7 +70,7 @@ struct SampleResult {
 /// some inputs held) through the reference and the metamodel.
 pub fn validate(
     metamodel: &Metamodel,
-    problem: &Problem,
+    study: &Study,
     inputs: &InputModel,
     samples: usize,
     seed: u64,
@@ -78,13 +79,13 @@ pub fn validate(
     if !(2..=100_000).contains(&samples) {
         return Err(Error::invalid("samples", format!("must be between 2 and 100000, got {samples}")));
     }
-    if inputs.len() != problem.inputs.len() {
+    if inputs.len() != study.inputs.len() {
         return Err(Error::invalid("inputs", "the sampled inputs must be the study's, some possibly held"));
     }
     let fixed: BTreeMap<String, f64> = inputs
         .inputs
         .iter()
-        .zip(&problem.inputs.inputs)
+        .zip(&study.inputs.inputs)
         .filter_map(|(sampled, study)| match (sampled.marginal, study.marginal) {
             (_, Marginal::Constant { .. }) => None,
             (Marginal::Constant { value }, _) => Some((sampled.name.clone(), value)),
@@ -93,36 +94,32 @@ pub fn validate(
         .collect();
     let xs = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let path = metamodel.calibration.options.wind;
-    let roof = Response::Displacement { floor: problem.structure.floors() };
+    let roof = Response::Displacement { floor: study.structure.floors() };
     let shapes = &metamodel.modes.shapes;
     let done = AtomicUsize::new(0);
     let results: Vec<SampleResult> = xs
         .par_iter()
         .enumerate()
-        .map_init(Workspace::default, |workspace, (k, x)| {
-            if observer.cancelled() {
-                return Err(Error::Cancelled);
-            }
-            let (p, coarse) = problem.sample_storm(x, path, seed, k, workspace)?;
-            let forces = coarse.on_grid(&problem.storm);
-            let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p)?);
+        .map_init(TransformWorkspace::default, |workspace, (k, x)| {
+            check(observer)?;
+            let (p, coarse) = study.sample_storm(x, path, seed, k, workspace)?;
+            let forces = coarse.on_grid(&study.storm);
+            let (modes, dampers) = (study.sample_modes(&p), study.dampers(&p)?);
             let started = Instant::now();
             let reference =
-                integrate_reduced(&modes, p.damping_ratio, &dampers, &forces, problem.storm.time_step, &|| {
-                    observer.cancelled()
-                })?;
+                integrate_reduced(&modes, p.damping_ratio, &dampers, &forces, study.storm.time_step, observer)?;
             let reference_seconds = started.elapsed().as_secs_f64();
             let started = Instant::now();
             let predicted = metamodel
-                .predict(problem, x, &forces)
+                .predict(study, x, &forces)
                 .map_err(|e| Error::Numerical(format!("validation sample {k}: {e}")))?;
             let metamodel_seconds = started.elapsed().as_secs_f64();
             let mode_errors: Vec<f64> =
                 reference.displacements.iter().zip(&predicted).map(|(y, y_hat)| relative_error(y, y_hat)).collect();
             let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
             let reference = reference.motion();
-            let predicted = ModalMotion::from_displacements(predicted, problem.storm.time_step);
-            let structure = &problem.structure;
+            let predicted = ModalMotion::from_displacements(predicted, study.storm.time_step);
+            let structure = &study.structure;
             let reference_view = ResponseView::new(shapes, structure, &reference, &model, &forces);
             let metamodel_view = ResponseView::new(shapes, structure, &predicted, &model, &forces);
             let (u, u_hat) = (roof.history(&reference_view)?, roof.history(&metamodel_view)?);

@@ -2,13 +2,13 @@
 
 use crate::analysis::{Response, ResponseKind};
 use crate::error::{Error, Result};
-use crate::problem::{Problem, ProblemSpec};
+use crate::study::{Study, StudySpec};
 use crate::uncertainty::{InputModel, parse_assignment};
 use clap::Args;
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, Args)]
-pub struct ProblemArgs {
+pub struct StudyArgs {
     /// Built-in study: frame40 (dampers as printed, N·s/m) or frame40-kn (the same numbers in kN·s/m).
     #[arg(long, default_value = "frame40-kn", conflicts_with = "spec")]
     pub preset: String,
@@ -29,17 +29,17 @@ pub struct ProblemArgs {
     pub modes: Option<usize>,
 }
 
-impl ProblemArgs {
+impl StudyArgs {
     /// Reads the spec (file or preset), applies the command-line overrides and the fixed inputs.
-    pub fn problem(&self) -> Result<Problem> {
+    pub fn study(&self) -> Result<Study> {
         let mut spec = match &self.spec {
             Some(path) => {
                 let text = std::fs::read_to_string(path)
                     .map_err(|e| Error::invalid("spec", format!("cannot read {}: {e}", path.display())))?;
-                serde_json::from_str::<ProblemSpec>(&text)
+                serde_json::from_str::<StudySpec>(&text)
                     .map_err(|e| Error::invalid("spec", format!("{}: {e}", path.display())))?
             }
-            None => ProblemSpec { preset: Some(self.preset.clone()), ..Default::default() },
+            None => StudySpec { preset: Some(self.preset.clone()), ..Default::default() },
         };
         if self.duration.is_some() {
             spec.duration_s = self.duration;
@@ -50,12 +50,12 @@ impl ProblemArgs {
         if self.modes.is_some() {
             spec.modes = self.modes;
         }
-        let mut problem = Problem::from_spec(&spec)?;
+        let mut study = Study::from_spec(&spec)?;
         for assignment in &self.fix {
             let (name, value) = parse_assignment(assignment)?;
-            problem.inputs = problem.inputs.with_fixed(&name, value)?;
+            study.inputs = study.inputs.with_fixed(&name, value)?;
         }
-        Ok(problem)
+        Ok(study)
     }
 }
 
@@ -110,9 +110,9 @@ pub struct ResponseArgs {
 }
 
 impl ResponseArgs {
-    pub fn response(&self, problem: &Problem) -> Result<Response> {
+    pub fn response(&self, study: &Study) -> Result<Response> {
         let kind = if self.drift { ResponseKind::Drift } else { ResponseKind::parse(&self.response)? };
-        kind.located(self.floor, self.group, &problem.structure)
+        kind.located(self.floor, self.group, &study.structure)
     }
 }
 

@@ -9,13 +9,14 @@ use crate::analysis::{
     HazardOptions, Response, ResponseKind, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve,
     metamodel_hazard, metamodel_peaks, metamodel_profiles, metamodel_sensitivity,
 };
-use crate::cancel::Never;
 use crate::dynamics::{integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::surrogate::{BatchWorkspace, CalibrationOptions, LANES, Metamodel, Reduction, Silent, calibrate};
+use crate::progress::Silent;
+use crate::simd::LANES;
+use crate::study::Study;
+use crate::surrogate::{BatchWorkspace, CalibrationOptions, Metamodel, Reduction, calibrate};
 use crate::uncertainty::rng_from_seed;
-use crate::wind::{ForceSource, Workspace};
+use crate::wind::{ForceSource, TransformWorkspace};
 use clap::Args;
 use serde::Serialize;
 use std::time::Instant;
@@ -97,12 +98,12 @@ fn time<T>(repetitions: usize, mut f: impl FnMut(u64) -> Result<T>) -> Result<f6
 /// Runs every measurement of [`BenchReport`].
 pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     let repetitions = args.repetitions.max(1);
-    let problem = Problem::preset(&args.preset)?.with_storm(args.duration, 0.01)?;
+    let study = Study::preset(&args.preset)?.with_storm(args.duration, 0.01)?;
     let row = |stage: String, median_seconds: f64, repetitions: usize| BenchRow { stage, median_seconds, repetitions };
     let mut rows = Vec::new();
 
     let options = CalibrationOptions { experiments: args.experiments, ..Default::default() };
-    let metamodel = calibrate(&problem, &options, &Silent)?;
+    let metamodel = calibrate(&study, &options, &Silent)?;
     let s = &metamodel.calibration.seconds;
     let k = args.experiments;
     rows.push(row(format!("calibration, K = {k}, end to end (all threads)"), s.total, 1));
@@ -111,12 +112,12 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     rows.push(row("  other experiments through the reference, NARX fits".into(), s.coefficients, 1));
     rows.push(row("  polynomial chaos expansions, diagnostics".into(), s.expansion, 1));
 
-    let (per_sample, speedup) = per_sample_rows(&problem, &metamodel, repetitions)?;
+    let (per_sample, speedup) = per_sample_rows(&study, &metamodel, repetitions)?;
     rows.extend(per_sample);
 
-    let roof = Response::Displacement { floor: problem.structure.floors() };
+    let roof = Response::Displacement { floor: study.structure.floors() };
     let exceedance = time(repetitions.min(3), |r| {
-        let peaks = metamodel_peaks(&metamodel, &problem, &problem.inputs, args.samples, 1 + r, roof, &Silent)?;
+        let peaks = metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, roof, &Silent)?;
         Ok(exceedance_curve(&peaks, &automatic_thresholds(&peaks, 50), 0.95))
     })?;
     rows.push(row(
@@ -124,9 +125,9 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         exceedance,
         repetitions.min(3),
     ));
-    let roof_acceleration = Response::Acceleration { floor: problem.structure.floors() };
+    let roof_acceleration = Response::Acceleration { floor: study.structure.floors() };
     let acceleration = time(repetitions.min(3), |r| {
-        metamodel_peaks(&metamodel, &problem, &problem.inputs, args.samples, 1 + r, roof_acceleration, &Silent)
+        metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, roof_acceleration, &Silent)
     })?;
     rows.push(row(
         format!("roof acceleration exceedance peaks, {} samples (all threads)", args.samples),
@@ -135,8 +136,8 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     ));
     for kind in [ResponseKind::Drift, ResponseKind::Acceleration] {
         let profile = time(repetitions.min(3), |r| {
-            let inputs = &problem.inputs;
-            let samples = metamodel_profiles(&metamodel, &problem, inputs, args.samples, 1 + r, kind, &Silent)?;
+            let inputs = &study.inputs;
+            let samples = metamodel_profiles(&metamodel, &study, inputs, args.samples, 1 + r, kind, &Silent)?;
             samples.quantile_profile(0.5, 0.95)
         })?;
         rows.push(row(
@@ -150,7 +151,7 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         ));
     }
     let hazard = HazardOptions {
-        climate: *problem.inputs.marginal(WIND_SPEED)?,
+        climate: *study.inputs.marginal(WIND_SPEED)?,
         samples: args.hazard_samples,
         seed: 1,
         thresholds: None,
@@ -159,7 +160,7 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         confidence: 0.95,
         sampling: Sampling::Stratified,
     };
-    let hazard_seconds = time(repetitions.min(3), |_| metamodel_hazard(&metamodel, &problem, roof, &hazard, &Silent))?;
+    let hazard_seconds = time(repetitions.min(3), |_| metamodel_hazard(&metamodel, &study, roof, &hazard, &Silent))?;
     rows.push(row(
         format!(
             "hazard curve, {} storms, {} return periods (all threads)",
@@ -170,8 +171,7 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         repetitions.min(3),
     ));
     let n = args.sensitivity_samples;
-    let sobol =
-        time(repetitions.min(3), |r| metamodel_sensitivity(&metamodel, &problem, roof, n, 1 + r, 0.95, &Silent))?;
+    let sobol = time(repetitions.min(3), |r| metamodel_sensitivity(&metamodel, &study, roof, n, 1 + r, 0.95, &Silent))?;
     rows.push(row(
         format!("Sobol indices, N = {n}, with bootstrap intervals (all threads)"),
         sobol,
@@ -180,7 +180,7 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     Ok(BenchReport {
         preset: args.preset.clone(),
         duration_s: args.duration,
-        time_step_s: problem.storm.time_step,
+        time_step_s: study.storm.time_step,
         threads: rayon::current_num_threads(),
         experiments: k,
         samples: args.samples,
@@ -193,15 +193,15 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
 
 /// Per-sample stages of one storm at the inputs' means, each on one thread; returns the rows and
 /// the reduced reference's time over the metamodel's on the same storm.
-fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize) -> Result<(Vec<BenchRow>, f64)> {
-    let p = problem;
+fn per_sample_rows(study: &Study, metamodel: &Metamodel, repetitions: usize) -> Result<(Vec<BenchRow>, f64)> {
+    let p = study;
     let x = p.inputs.means();
     let params = p.parameters(&x)?;
     let shapes = p.modes.shapes.as_ref();
     let dampers = p.dampers(&params)?;
     let dt = p.storm.time_step;
     let floor_forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(1))?;
-    let mut wind_workspace = Workspace::default();
+    let mut wind_workspace = TransformWorkspace::default();
     let coarse =
         p.modal_wind.simulate(params.wind_speed, p.storm.duration, &mut wind_workspace, &mut rng_from_seed(1))?;
     let modal_forces = coarse.on_grid(&p.storm);
@@ -228,9 +228,9 @@ fn per_sample_rows(problem: &Problem, metamodel: &Metamodel, repetitions: usize)
         let modal_grid =
             time(repetitions, |r| p.modal_wind.forces(params.wind_speed, &p.storm, &mut rng_from_seed(r)))?;
         let reduced = time(repetitions, |_| {
-            integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, dt, &Never)
+            integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, dt, &Silent)
         })?;
-        let full = time(repetitions, |_| integrate_full(&system, &dampers, &floor_forces, dt, &Never))?;
+        let full = time(repetitions, |_| integrate_full(&system, &dampers, &floor_forces, dt, &Silent))?;
         let mut workspace = BatchWorkspace::default();
         let metamodel_batch =
             time(repetitions, |_| metamodel.peaks(p, &batch, &Reduction::Combination(&weights), &mut workspace))?;

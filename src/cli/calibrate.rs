@@ -1,11 +1,10 @@
 //! `windmeta calibrate`: a PC-NARX metamodel from a Latin-hypercube design of reference storms.
 
-use super::ProblemArgs;
+use super::StudyArgs;
 use crate::analysis::{ClimateCoverage, ClimateSpec};
 use crate::error::{Error, Result};
-use crate::surrogate::{
-    CalibrationOptions, Observer, Progress, Refinement, WindCoverage, calibrate as run_calibration,
-};
+use crate::progress::{Observer, Progress};
+use crate::surrogate::{CalibrationOptions, Refinement, WindCoverage, calibrate as run_calibration};
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::sync::Mutex;
@@ -24,7 +23,7 @@ pub enum RefinementChoice {
 #[derive(Debug, Clone, Args)]
 pub struct CalibrateArgs {
     #[command(flatten)]
-    pub problem: ProblemArgs,
+    pub study: StudyArgs,
     /// Experiments K of the Latin-hypercube design.
     #[arg(long, default_value_t = 200)]
     pub experiments: usize,
@@ -94,7 +93,7 @@ fn coverage(args: &CalibrateArgs) -> Result<Option<WindCoverage>> {
 }
 
 pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
-    let problem = args.problem.problem()?;
+    let study = args.study.study()?;
     let mut options = CalibrationOptions { experiments: args.experiments, seed: args.seed, ..Default::default() };
     options.refinement = match args.refinement {
         RefinementChoice::Lm => Refinement::LevenbergMarquardt,
@@ -104,15 +103,15 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
     options.narx.cross_terms = args.cross_terms;
     options.cover_wind_speeds = coverage(args)?;
     let observer = Terminal { started: Instant::now(), last: Mutex::new(String::new()) };
-    let metamodel = run_calibration(&problem, &options, &observer)?;
+    let metamodel = run_calibration(&study, &options, &observer)?;
     let json = serde_json::to_string(&metamodel).expect("a metamodel serialises");
     std::fs::write(&args.out, json).map_err(|e| Error::invalid("out", format!("{}: {e}", args.out.display())))?;
     let c = &metamodel.calibration;
     let mut out = format!(
         "{}: {} experiments of {} s, seed {}, in {:.1} s (experiments {:.1} s, structure {:.1} s, coefficients {:.1} s, expansions {:.1} s)\n",
-        problem.name,
+        study.name,
         options.experiments,
-        problem.storm.duration,
+        study.storm.duration,
         options.seed,
         c.seconds.total,
         c.seconds.experiments,

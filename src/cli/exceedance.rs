@@ -43,9 +43,9 @@ fn csv_text(curve: &ExceedanceCurve, response: &Response) -> String {
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     check_confidence(args.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
-    let (metamodel, problem) = read_metamodel(&args.sampling.model)?;
-    let response = args.response.response(&problem)?;
-    let inputs = args.sampling.held_inputs(&problem.inputs)?;
+    let (metamodel, study) = read_metamodel(&args.sampling.model)?;
+    let response = args.response.response(&study)?;
+    let inputs = args.sampling.held_inputs(&study.inputs)?;
     if let Some(t) = &args.thresholds
         && (t.is_empty() || t.iter().any(|x| !x.is_finite()))
     {
@@ -53,7 +53,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     }
     let started = Instant::now();
     let peaks =
-        metamodel_peaks(&metamodel, &problem, &inputs, args.sampling.samples, args.seed, response, &Counter(started))?;
+        metamodel_peaks(&metamodel, &study, &inputs, args.sampling.samples, args.seed, response, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
     let curve = exceedance_curve(&peaks, &thresholds, args.confidence);

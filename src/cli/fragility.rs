@@ -54,7 +54,7 @@ pub fn parse_speeds(text: &str) -> Result<Vec<f64>> {
 
 pub fn fragility(args: &FragilityArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["json", "svg"])?;
-    let (metamodel, problem) = read_metamodel(&args.model)?;
+    let (metamodel, study) = read_metamodel(&args.model)?;
     let options = FragilityOptions {
         wind_speeds: parse_speeds(&args.wind_speeds)?,
         thresholds: args.thresholds.clone(),
@@ -62,9 +62,9 @@ pub fn fragility(args: &FragilityArgs) -> Result<String> {
         seed: args.analysis.seed,
         confidence: args.analysis.confidence,
     };
-    let response = args.response.response(&problem)?;
+    let response = args.response.response(&study)?;
     let started = Instant::now();
-    let result = metamodel_fragility(&metamodel, &problem, response, &options, &Counter(started))?;
+    let result = metamodel_fragility(&metamodel, &study, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = response.describe();
     let out = args.out.as_deref().zip(format);

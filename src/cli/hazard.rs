@@ -51,12 +51,12 @@ pub struct HazardArgs {
 
 pub fn hazard(args: &HazardArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
-    let (metamodel, problem) = read_metamodel(&args.model)?;
+    let (metamodel, study) = read_metamodel(&args.model)?;
     let climate = match &args.climate {
         Some(text) => serde_json::from_str::<ClimateSpec>(text)
             .map_err(|e| Error::invalid("climate", e.to_string()))?
             .resolve("climate")?,
-        None => *problem.inputs.marginal(WIND_SPEED)?,
+        None => *study.inputs.marginal(WIND_SPEED)?,
     };
     let options = HazardOptions {
         climate,
@@ -71,9 +71,9 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
             SamplingArg::MonteCarlo => Sampling::MonteCarlo,
         },
     };
-    let response = args.response.response(&problem)?;
+    let response = args.response.response(&study)?;
     let started = Instant::now();
-    let curve = metamodel_hazard(&metamodel, &problem, response, &options, &Counter(started))?;
+    let curve = metamodel_hazard(&metamodel, &study, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = response.describe();
     let out = args.out.as_deref().zip(format);

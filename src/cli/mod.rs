@@ -14,7 +14,7 @@ mod sensitivity;
 mod simulate;
 mod validate;
 
-pub use args::ProblemArgs;
+pub use args::StudyArgs;
 pub use bench::{BenchArgs, BenchReport, BenchRow, bench, bench_report, table};
 pub use calibrate::{CalibrateArgs, calibrate};
 pub use exceedance::{ExceedanceArgs, exceedance};
@@ -28,14 +28,14 @@ pub use simulate::{SimulateArgs, simulate};
 pub use validate::{ValidateArgs, validate};
 
 use crate::error::{Error, Result};
-use crate::problem::Problem;
+use crate::study::Study;
 use crate::surrogate::Metamodel;
 
 /// Reads a metamodel file and rebuilds its study.
-fn read_metamodel(path: &std::path::Path) -> Result<(Metamodel, Problem)> {
+fn read_metamodel(path: &std::path::Path) -> Result<(Metamodel, Study)> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| Error::invalid("model", format!("cannot read {}: {e}", path.display())))?;
     let metamodel = Metamodel::from_json(&text)?;
-    let problem = metamodel.problem()?;
-    Ok((metamodel, problem))
+    let study = metamodel.study()?;
+    Ok((metamodel, study))
 }

@@ -1,6 +1,6 @@
 //! `windmeta modes`: frequencies, periods, generalized masses and roof-normalised shapes.
 
-use super::ProblemArgs;
+use super::StudyArgs;
 use crate::error::Result;
 use clap::Args;
 use serde_json::json;
@@ -8,20 +8,20 @@ use serde_json::json;
 #[derive(Debug, Clone, Args)]
 pub struct ModesArgs {
     #[command(flatten)]
-    pub problem: ProblemArgs,
+    pub study: StudyArgs,
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
 }
 
 pub fn modes(args: &ModesArgs) -> Result<String> {
-    let problem = args.problem.problem()?;
-    let modes = &problem.modes;
+    let study = args.study.study()?;
+    let modes = &study.modes;
     let shapes: Vec<Vec<f64>> =
-        (0..modes.count()).map(|m| (0..problem.structure.floors()).map(|j| modes.shapes[(j, m)]).collect()).collect();
+        (0..modes.count()).map(|m| (0..study.structure.floors()).map(|j| modes.shapes[(j, m)]).collect()).collect();
     if args.json {
         let value = json!({
-            "preset": problem.name,
+            "preset": study.name,
             "frequencies_rad_s": modes.frequencies,
             "periods_s": modes.periods(),
             "modal_masses_kg": modes.modal_masses,
@@ -31,9 +31,9 @@ pub fn modes(args: &ModesArgs) -> Result<String> {
     }
     let mut out = format!(
         "{}: {} floors, roof at {:.1} m\n",
-        problem.name,
-        problem.structure.floors(),
-        problem.structure.floor_elevations.last().unwrap()
+        study.name,
+        study.structure.floors(),
+        study.structure.floor_elevations.last().unwrap()
     );
     out += "mode  ω (rad/s)  f (Hz)   T (s)   M_m (kg)\n";
     for (m, (w, mass)) in modes.frequencies.iter().zip(&modes.modal_masses).enumerate() {
@@ -47,7 +47,7 @@ pub fn modes(args: &ModesArgs) -> Result<String> {
         );
     }
     out += "shapes (roof = 1), floor by floor from the roof down:\n";
-    for j in (0..problem.structure.floors()).rev() {
+    for j in (0..study.structure.floors()).rev() {
         let row: Vec<String> = shapes.iter().map(|s| format!("{:>8.4}", s[j])).collect();
         out += &format!("{:>5}  {}\n", j + 1, row.join(" "));
     }

@@ -1,11 +1,11 @@
 //! `windmeta sample-peaks`: peaks of a response over many storms through the reference model.
 
-use super::ProblemArgs;
+use super::StudyArgs;
 use super::args::ResponseArgs;
 use super::simulate::WindChoice;
 use crate::analysis::{PeakSummary, reference_peak};
 use crate::error::{Error, Result};
-use crate::problem::{Order, WindPath};
+use crate::study::{Order, WindPath};
 use crate::uncertainty::{monte_carlo, rng_from_seed, stream_seed};
 use clap::Args;
 use rayon::prelude::*;
@@ -19,7 +19,7 @@ pub const MAX_REFERENCE_SAMPLES: usize = 100_000;
 #[derive(Debug, Clone, Args)]
 pub struct SamplePeaksArgs {
     #[command(flatten)]
-    pub problem: ProblemArgs,
+    pub study: StudyArgs,
     /// Number of storms (one input sample each).
     #[arg(long, default_value_t = 200)]
     pub samples: usize,
@@ -46,13 +46,13 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
             format!("must be between 1 and {MAX_REFERENCE_SAMPLES}, got {}", args.samples),
         ));
     }
-    let mut problem = args.problem.problem()?;
+    let mut study = args.study.study()?;
     if args.nominal {
-        problem.inputs = problem.inputs.nominal();
+        study.inputs = study.inputs.nominal();
     }
-    let response = args.response.response(&problem)?;
+    let response = args.response.response(&study)?;
     let started = Instant::now();
-    let inputs = monte_carlo(&problem.inputs, args.samples, &mut rng_from_seed(args.seed));
+    let inputs = monte_carlo(&study.inputs, args.samples, &mut rng_from_seed(args.seed));
     let order = if args.full_order { Order::Full } else { Order::Reduced };
     let path =
         if args.full_order || matches!(args.wind, WindChoice::Field) { WindPath::Field } else { WindPath::Modal };
@@ -62,12 +62,12 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
         .par_iter()
         .enumerate()
         .map(|(k, x)| {
-            let run = problem.reference_run(x, order, path, &mut rng_from_seed(stream_seed(args.seed, k as u64)))?;
+            let run = study.reference_run(x, order, path, &mut rng_from_seed(stream_seed(args.seed, k as u64)))?;
             let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
             if finished.is_multiple_of(step) || finished == args.samples {
                 eprintln!("{finished}/{} storms, {:.1} s", args.samples, started.elapsed().as_secs_f64());
             }
-            reference_peak(&problem, x, &run, response)
+            reference_peak(&study, x, &run, response)
         })
         .collect::<Result<Vec<f64>>>()?;
     let summary = PeakSummary::of(&peaks);
@@ -76,12 +76,12 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
         let quantiles: serde_json::Map<String, serde_json::Value> =
             summary.quantiles.iter().map(|(p, v)| (format!("{p}"), json!(v))).collect();
         let value = json!({
-            "preset": problem.name,
+            "preset": study.name,
             "samples": args.samples,
             "seed": args.seed,
             "nominal": args.nominal,
             "order": if args.full_order { "full" } else { "reduced" },
-            "duration_s": problem.storm.duration,
+            "duration_s": study.storm.duration,
             "response": response,
             "unit": response.unit(),
             "peaks": peaks,
@@ -94,10 +94,10 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
     }
     let mut out = format!(
         "{}: peak {} of {} storms of {} s ({} inputs, seed {})\n",
-        problem.name,
+        study.name,
         response.describe(),
         args.samples,
-        problem.storm.duration,
+        study.storm.duration,
         if args.nominal { "nominal" } else { "random" },
         args.seed
     );

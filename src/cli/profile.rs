@@ -43,13 +43,13 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
     check_quantile(args.quantile)?;
     check_confidence(args.analysis.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
-    let (metamodel, problem) = read_metamodel(&args.sampling.model)?;
-    let inputs = args.sampling.held_inputs(&problem.inputs)?;
+    let (metamodel, study) = read_metamodel(&args.sampling.model)?;
+    let inputs = args.sampling.held_inputs(&study.inputs)?;
     let kind = ResponseKind::parse(&args.response)?;
     let started = Instant::now();
     let seed = args.analysis.seed;
     let samples =
-        metamodel_profiles(&metamodel, &problem, &inputs, args.sampling.samples, seed, kind, &Counter(started))?;
+        metamodel_profiles(&metamodel, &study, &inputs, args.sampling.samples, seed, kind, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let profile = samples.quantile_profile(args.quantile, args.analysis.confidence)?;
     let label = format!("peak {} ({})", kind.name().replace('_', " "), profile.unit);

@@ -23,12 +23,12 @@ pub struct SensitivityArgs {
 }
 
 pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
-    let (metamodel, problem) = read_metamodel(&args.model)?;
-    let response = args.response.response(&problem)?;
+    let (metamodel, study) = read_metamodel(&args.model)?;
+    let response = args.response.response(&study)?;
     let started = Instant::now();
     let result = metamodel_sensitivity(
         &metamodel,
-        &problem,
+        &study,
         response,
         args.samples,
         args.analysis.seed,

@@ -1,9 +1,9 @@
 //! `windmeta simulate`: one storm through the reference model.
 
-use super::ProblemArgs;
+use super::StudyArgs;
 use crate::analysis::{Response, ResponseKind, STANDARD_GRAVITY, profile_responses, reference_history, reference_peak};
 use crate::error::{Error, Result};
-use crate::problem::{Order, Problem, WindPath};
+use crate::study::{Order, Study, WindPath};
 use crate::uncertainty::rng_from_seed;
 use clap::{Args, ValueEnum};
 use serde_json::json;
@@ -21,7 +21,7 @@ pub enum WindChoice {
 #[derive(Debug, Clone, Args)]
 pub struct SimulateArgs {
     #[command(flatten)]
-    pub problem: ProblemArgs,
+    pub study: StudyArgs,
     /// Seed of the wind's random phases.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -49,34 +49,34 @@ pub struct SimulateArgs {
 
 pub fn simulate(args: &SimulateArgs) -> Result<String> {
     let started = Instant::now();
-    let problem = args.problem.problem()?;
+    let study = args.study.study()?;
     let setup_seconds = started.elapsed().as_secs_f64();
     // Every input that is not fixed sits at its mean.
-    let x = problem.inputs.means();
+    let x = study.inputs.means();
     let order = if args.full_order { Order::Full } else { Order::Reduced };
     let path = match (order, args.wind) {
         (Order::Full, _) | (_, WindChoice::Field) => WindPath::Field,
         _ => WindPath::Modal,
     };
-    let run = problem.reference_run(&x, order, path, &mut rng_from_seed(args.seed))?;
-    let dt = problem.storm.time_step;
+    let run = study.reference_run(&x, order, path, &mut rng_from_seed(args.seed))?;
+    let dt = study.storm.time_step;
     let (peak_index, peak) = run
         .roof
         .iter()
         .enumerate()
         .fold((0, 0.0f64), |(bi, b), (i, v)| if v.abs() > b { (i, v.abs()) } else { (bi, b) });
     if let Some(path) = &args.out {
-        let responses = history_responses(args, &problem)?;
+        let responses = history_responses(args, &study)?;
         let histories =
-            responses.iter().map(|&r| reference_history(&problem, &x, &run, r)).collect::<Result<Vec<Vec<f64>>>>()?;
+            responses.iter().map(|&r| reference_history(&study, &x, &run, r)).collect::<Result<Vec<Vec<f64>>>>()?;
         write_histories(path, &responses, &histories, dt)?;
     }
     // Every response at every floor where it exists.
     let mut peaks = serde_json::Map::new();
     let mut largest = Vec::new();
     for kind in ResponseKind::ALL {
-        let responses = profile_responses(kind, &problem)?;
-        let values = responses.iter().map(|&r| reference_peak(&problem, &x, &run, r)).collect::<Result<Vec<f64>>>()?;
+        let responses = profile_responses(kind, &study)?;
+        let values = responses.iter().map(|&r| reference_peak(&study, &x, &run, r)).collect::<Result<Vec<f64>>>()?;
         let (at, most) = responses
             .iter()
             .zip(&values)
@@ -86,7 +86,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
         peaks.insert(kind.name().to_string(), json!({"unit": responses[0].unit(), "floors": floors, "peaks": values}));
     }
     let inputs: serde_json::Map<String, serde_json::Value> =
-        problem.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
+        study.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
     let order_name = if args.full_order { "full" } else { "reduced" };
     let path_name = match path {
         WindPath::Field => "field",
@@ -94,11 +94,11 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
     };
     if args.json {
         let value = json!({
-            "preset": problem.name,
+            "preset": study.name,
             "order": order_name,
             "wind": path_name,
             "seed": args.seed,
-            "duration_s": problem.storm.duration,
+            "duration_s": study.storm.duration,
             "time_step_s": dt,
             "inputs": inputs,
             "peak_roof_displacement_m": peak,
@@ -111,7 +111,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
     }
     let mut out = format!(
         "{} storm of {} s at Δt = {} s, {order_name}-order, {path_name} wind, seed {}\n",
-        problem.name, problem.storm.duration, dt, args.seed
+        study.name, study.storm.duration, dt, args.seed
     );
     for (name, value) in &inputs {
         out += &format!("  {name:<15} {value}\n");
@@ -137,7 +137,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
 
 /// The responses whose histories `--out` writes: each `--history` kind (displacement by default)
 /// at each of `--history-floors` (the roof by default; `all`: every floor where it exists).
-fn history_responses(args: &SimulateArgs, problem: &Problem) -> Result<Vec<Response>> {
+fn history_responses(args: &SimulateArgs, study: &Study) -> Result<Vec<Response>> {
     let kinds = if args.histories.is_empty() {
         vec![ResponseKind::Displacement]
     } else {
@@ -146,8 +146,8 @@ fn history_responses(args: &SimulateArgs, problem: &Problem) -> Result<Vec<Respo
     let mut responses = Vec::new();
     for kind in kinds {
         match args.history_floors.as_deref().map(str::trim) {
-            None => responses.push(kind.located(None, None, &problem.structure)?),
-            Some("all") => responses.extend(profile_responses(kind, problem)?),
+            None => responses.push(kind.located(None, None, &study.structure)?),
+            Some("all") => responses.extend(profile_responses(kind, study)?),
             Some(list) => {
                 for floor in list.split(',') {
                     let floor = floor.trim().parse::<usize>().map_err(|_| {
@@ -156,7 +156,7 @@ fn history_responses(args: &SimulateArgs, problem: &Problem) -> Result<Vec<Respo
                             format!("`{floor}` is not a floor; give `all` or floors such as 1,20,40"),
                         )
                     })?;
-                    responses.push(kind.located(Some(floor), None, &problem.structure)?);
+                    responses.push(kind.located(Some(floor), None, &study.structure)?);
                 }
             }
         }

@@ -3,7 +3,7 @@
 use super::read_metamodel;
 use crate::analysis::{validate as run_validation, validation_svg};
 use crate::error::{Error, Result};
-use crate::surrogate::{Observer, Progress};
+use crate::progress::{Observer, Progress};
 use crate::uncertainty::parse_assignment;
 use clap::Args;
 use std::path::PathBuf;
@@ -47,13 +47,13 @@ impl Observer for Counter {
 }
 
 pub fn validate(args: &ValidateArgs) -> Result<String> {
-    let (metamodel, problem) = read_metamodel(&args.model)?;
-    let mut inputs = problem.inputs.clone();
+    let (metamodel, study) = read_metamodel(&args.model)?;
+    let mut inputs = study.inputs.clone();
     for assignment in &args.fix {
         let (name, value) = parse_assignment(assignment)?;
         inputs = inputs.with_fixed(&name, value)?;
     }
-    let report = run_validation(&metamodel, &problem, &inputs, args.samples, args.seed, &Counter(Instant::now()))?;
+    let report = run_validation(&metamodel, &study, &inputs, args.samples, args.seed, &Counter(Instant::now()))?;
     let json = serde_json::to_string_pretty(&report).expect("a report serialises");
     if let Some(path) = &args.out {
         std::fs::write(path, &json).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;
@@ -94,7 +94,7 @@ pub fn validate(args: &ValidateArgs) -> Result<String> {
          calibration mean relative error (NARX, mean over modes): {:.2e}\n\
          largest gap between the exceedance curves: {:.3}\n\
          per sample: reference {:.1} ms, metamodel {:.2} ms (×{:.0})\n{}",
-        problem.name,
+        study.name,
         report.samples,
         report.seed,
         report.fixed.iter().map(|(name, value)| format!(", {name} held at {value}")).collect::<String>(),

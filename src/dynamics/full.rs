@@ -6,9 +6,9 @@
 //! from the modal exponential integrator, so the two check each other.
 
 use super::damper::{Dampers, ImplicitDamperSolve};
-use crate::cancel::{CHECK_EVERY_STEPS, Cancel, check};
 use crate::error::{Error, Result};
 use crate::linalg::{cholesky, cholesky_solve, multiply_into};
+use crate::progress::{CHECK_EVERY_STEPS, Observer, check};
 use crate::structure::{Modes, Structure};
 use crate::wind::FloorForces;
 
@@ -67,7 +67,7 @@ pub fn integrate_full(
     dampers: &Dampers,
     forces: &FloorForces,
     time_step: f64,
-    cancel: &dyn Cancel,
+    observer: &dyn Observer,
 ) -> Result<FloorResponse> {
     let n = system.size;
     let dt = time_step;
@@ -111,7 +111,7 @@ pub fn integrate_full(
     let mut damper_forces = vec![0.0; dampers.len()];
     for i in 1..steps {
         if i % CHECK_EVERY_STEPS == 0 {
-            check(cancel)?;
+            check(observer)?;
         }
         // r = f_{i+1} + M(2u̇/Δt + ü) − K(u + Δt u̇/2).
         for j in 0..n {

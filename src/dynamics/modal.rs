@@ -9,8 +9,8 @@
 
 use super::damper::{Dampers, ImplicitDamperSolve};
 use super::motion::ModalMotion;
-use crate::cancel::{CHECK_EVERY_STEPS, Cancel, check};
 use crate::error::{Error, Result};
+use crate::progress::{CHECK_EVERY_STEPS, Observer, check};
 use crate::structure::Modes;
 use crate::wind::ModalForces;
 
@@ -106,7 +106,7 @@ pub fn integrate_reduced(
     dampers: &Dampers,
     forces: &ModalForces,
     time_step: f64,
-    cancel: &dyn Cancel,
+    observer: &dyn Observer,
 ) -> Result<ModalResponse> {
     let count = modes.count();
     if forces.series.len() != count {
@@ -148,7 +148,7 @@ pub fn integrate_reduced(
 
     for i in 1..steps {
         if i % CHECK_EVERY_STEPS == 0 {
-            check(cancel)?;
+            check(observer)?;
         }
         for m in 0..count {
             let c = &coefficients[m];

@@ -11,8 +11,9 @@ use crate::analysis::{
     metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
 };
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::surrogate::{Metamodel, Observer};
+use crate::progress::Observer;
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use crate::uncertainty::Marginal;
 use serde::{Deserialize, Serialize};
 use utoipa::ToSchema;
@@ -23,19 +24,19 @@ use utoipa::ToSchema;
 pub struct HazardRequest {
     /// Storms run through the metamodel; at most the server's `--max-analysis-storms`.
     #[schema(minimum = 1, maximum = 1000000, default = 20000)]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub samples: usize,
     #[schema(default = 1)]
-    #[serde(deserialize_with = "crate::whole::seed")]
+    #[serde(deserialize_with = "crate::count::seed")]
     pub seed: u64,
     /// Floor (1-based); the roof when absent.
     #[schema(minimum = 1, maximum = 200)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub floor: Option<usize>,
     /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
     /// largest among the group's dampers.
     #[schema(minimum = 1, maximum = 10)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub group: Option<usize>,
     pub response: ResponseKind,
     /// The law of the annual maximum storm speed at 10 m; the metamodel's `wind_speed` marginal
@@ -87,18 +88,18 @@ pub struct FragilityRequest {
     pub thresholds: Option<Vec<f64>>,
     /// Storms at each speed.
     #[schema(minimum = 2, maximum = 1000000, default = 500)]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub samples: usize,
     #[schema(default = 1)]
-    #[serde(deserialize_with = "crate::whole::seed")]
+    #[serde(deserialize_with = "crate::count::seed")]
     pub seed: u64,
     #[schema(minimum = 1, maximum = 200)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub floor: Option<usize>,
     /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
     /// largest among the group's dampers.
     #[schema(minimum = 1, maximum = 10)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub group: Option<usize>,
     pub response: ResponseKind,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
@@ -107,10 +108,10 @@ pub struct FragilityRequest {
 
 impl HazardRequest {
     /// The analysis's options: the climate resolved (the metamodel's own wind law by default).
-    fn options(&self, problem: &Problem) -> Result<HazardOptions> {
+    fn options(&self, study: &Study) -> Result<HazardOptions> {
         let climate = match &self.climate {
             Some(spec) => spec.resolve("climate")?,
-            None => *problem.inputs.marginal(WIND_SPEED)?,
+            None => *study.inputs.marginal(WIND_SPEED)?,
         };
         Ok(HazardOptions {
             climate,
@@ -160,18 +161,18 @@ impl FragilityRequest {
 pub struct SensitivityRequest {
     /// Rows N of each of the two base samples: N·(groups + 2) storms are run.
     #[schema(minimum = 10, maximum = 1000000, default = 1024)]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub samples: usize,
     #[schema(default = 1)]
-    #[serde(deserialize_with = "crate::whole::seed")]
+    #[serde(deserialize_with = "crate::count::seed")]
     pub seed: u64,
     #[schema(minimum = 1, maximum = 200)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub floor: Option<usize>,
     /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
     /// largest among the group's dampers.
     #[schema(minimum = 1, maximum = 10)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub group: Option<usize>,
     pub response: ResponseKind,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
@@ -248,39 +249,39 @@ pub enum AnalysisAnswer {
 
 impl AnalysisRequest {
     /// The storms the request runs through the metamodel.
-    pub fn storms(&self, problem: &Problem) -> usize {
+    pub fn storms(&self, study: &Study) -> usize {
         match self {
             AnalysisRequest::Hazard(r) => r.samples,
             AnalysisRequest::Fragility(r) => r.samples.saturating_mul(r.wind_speeds.len()),
             AnalysisRequest::Sensitivity(r) => {
-                let random = problem.inputs.inputs.iter().filter(|i| !matches!(i.marginal, Marginal::Constant { .. }));
+                let random = study.inputs.inputs.iter().filter(|i| !matches!(i.marginal, Marginal::Constant { .. }));
                 r.samples.saturating_mul(random.count() + 3)
             }
         }
     }
 
     /// The response the request names, checked against the study's structure.
-    fn response(&self, problem: &Problem) -> Result<Response> {
+    fn response(&self, study: &Study) -> Result<Response> {
         let (floor, group, kind) = match self {
             AnalysisRequest::Hazard(r) => (r.floor, r.group, r.response),
             AnalysisRequest::Fragility(r) => (r.floor, r.group, r.response),
             AnalysisRequest::Sensitivity(r) => (r.floor, r.group, r.response),
         };
-        kind.located(floor, group, &problem.structure)
+        kind.located(floor, group, &study.structure)
     }
 
     /// The checks that need the study but no sampling; errors name the field.
-    pub fn check(&self, config: &ServeArgs, problem: &Problem) -> Result<()> {
-        let storms = self.storms(problem);
+    pub fn check(&self, config: &ServeArgs, study: &Study) -> Result<()> {
+        let storms = self.storms(study);
         if storms == 0 || storms > config.max_analysis_storms {
             return Err(Error::invalid(
                 "samples",
                 format!("the request runs {storms} storms; this server allows 1 to {}", config.max_analysis_storms),
             ));
         }
-        self.response(problem)?;
+        self.response(study)?;
         match self {
-            AnalysisRequest::Hazard(r) => r.options(problem)?.check(),
+            AnalysisRequest::Hazard(r) => r.options(study)?.check(),
             AnalysisRequest::Fragility(r) => r.options()?.check(),
             AnalysisRequest::Sensitivity(r) if r.samples < 10 => Err(Error::invalid("samples", "must be at least 10")),
             AnalysisRequest::Sensitivity(r) => check_confidence(r.confidence),
@@ -291,25 +292,25 @@ impl AnalysisRequest {
     pub fn answer(
         &self,
         metamodel: &Metamodel,
-        problem: &Problem,
+        study: &Study,
         metamodel_id: &str,
         observer: &dyn Observer,
     ) -> Result<AnalysisAnswer> {
         let metamodel_id = metamodel_id.to_string();
-        let response = self.response(problem)?;
+        let response = self.response(study)?;
         Ok(match self {
             AnalysisRequest::Hazard(r) => {
-                let options = r.options(problem)?;
-                let curve = metamodel_hazard(metamodel, problem, response, &options, observer)?;
+                let options = r.options(study)?;
+                let curve = metamodel_hazard(metamodel, study, response, &options, observer)?;
                 AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response, metamodel_id }))
             }
             AnalysisRequest::Fragility(r) => {
-                let fragility = metamodel_fragility(metamodel, problem, response, &r.options()?, observer)?;
+                let fragility = metamodel_fragility(metamodel, study, response, &r.options()?, observer)?;
                 AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response, metamodel_id }))
             }
             AnalysisRequest::Sensitivity(r) => {
                 let sensitivity =
-                    metamodel_sensitivity(metamodel, problem, response, r.samples, r.seed, r.confidence, observer)?;
+                    metamodel_sensitivity(metamodel, study, response, r.samples, r.seed, r.confidence, observer)?;
                 AnalysisAnswer::Sensitivity(Box::new(SensitivityAnswer { sensitivity, response, metamodel_id }))
             }
         })

@@ -1,14 +1,14 @@
 //! The metamodels read back from the store, kept loaded for the sampling requests that follow,
 //! with a bound on how many.
 
-use crate::problem::Problem;
+use crate::study::Study;
 use crate::surrogate::Metamodel;
 use lru::LruCache;
 use std::num::NonZeroUsize;
 use std::sync::Arc;
 
 /// A stored metamodel read back, with the study it rebuilds.
-pub type Loaded = Arc<(Metamodel, Problem)>;
+pub type Loaded = Arc<(Metamodel, Study)>;
 
 /// Loaded metamodels by id, the least recently used dropped first. A metamodel holds its study's
 /// modes and spectral table (a few MB at full size), so the bound is what bounds this memory.

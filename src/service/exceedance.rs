@@ -10,9 +10,10 @@ use crate::analysis::{
     check_thresholds, exceedance_curve, metamodel_peaks, metamodel_profiles,
 };
 use crate::error::{Error, Result, require_finite};
-use crate::problem::Problem;
+use crate::progress::{Observer, Progress};
 use crate::structure::MAX_FLOORS;
-use crate::surrogate::{Metamodel, Observer, Progress};
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use crate::uncertainty::InputModel;
 use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
@@ -28,19 +29,19 @@ pub struct ExceedanceRequest {
     /// Monte Carlo samples (storms) drawn from the input model; at most the server's
     /// `--max-samples` (20 000 by default).
     #[schema(minimum = 1, maximum = 1000000, default = 1000)]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub samples: usize,
     #[schema(default = 1)]
-    #[serde(deserialize_with = "crate::whole::seed")]
+    #[serde(deserialize_with = "crate::count::seed")]
     pub seed: u64,
     /// Floor (1-based, at most the structure's floors); the roof when absent.
     #[schema(minimum = 1, maximum = 200)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub floor: Option<usize>,
     /// Damper group (1-based) instead of a floor, for `damper_force` and `damper_stroke`: the
     /// largest among the group's dampers.
     #[schema(minimum = 1, maximum = 10)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub group: Option<usize>,
     pub response: ResponseKind,
     /// Peak values (in the response's unit: m, m/s² or N; 0 to 10⁹) at which to evaluate the curve; 50 evenly spread over the sampled
@@ -104,28 +105,28 @@ impl ExceedanceRequest {
 
     /// The checks that need the study but no sampling (the response's floor or group, the held
     /// inputs' names and supports), so that a request queued as an operation cannot fail on them.
-    pub fn check_against(&self, problem: &Problem) -> Result<()> {
-        self.response.located(self.floor, self.group, &problem.structure)?;
-        held_inputs(problem, &self.fixed).map(drop)
+    pub fn check_against(&self, study: &Study) -> Result<()> {
+        self.response.located(self.floor, self.group, &study.structure)?;
+        held_inputs(study, &self.fixed).map(drop)
     }
 
     /// Samples the metamodel and builds the curve (blocking; parallel over samples).
     pub fn answer(
         &self,
         metamodel: &Metamodel,
-        problem: &Problem,
+        study: &Study,
         metamodel_id: &str,
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
-        let response = self.response.located(self.floor, self.group, &problem.structure)?;
-        let inputs = held_inputs(problem, &self.fixed)?;
+        let response = self.response.located(self.floor, self.group, &study.structure)?;
+        let inputs = held_inputs(study, &self.fixed)?;
         let (peaks, profile) = match self.profile_quantile {
-            None => (metamodel_peaks(metamodel, problem, &inputs, self.samples, self.seed, response, observer)?, None),
+            None => (metamodel_peaks(metamodel, study, &inputs, self.samples, self.seed, response, observer)?, None),
             Some(p) => {
                 let (samples, seed) = (self.samples, self.seed);
-                let all = metamodel_profiles(metamodel, problem, &inputs, samples, seed, response.kind(), observer)?;
+                let all = metamodel_profiles(metamodel, study, &inputs, samples, seed, response.kind(), observer)?;
                 let columns: Vec<usize> = response
-                    .members(&problem.structure)?
+                    .members(&study.structure)?
                     .iter()
                     .map(|m| {
                         all.responses.iter().position(|r| r == m).expect("every floor with the response is profiled")
@@ -143,8 +144,8 @@ impl ExceedanceRequest {
 }
 
 /// The study's input model with the `fixed` inputs held; errors name `fixed.<input>`.
-pub fn held_inputs(problem: &Problem, fixed: &BTreeMap<String, f64>) -> Result<InputModel> {
-    let mut inputs = problem.inputs.clone();
+pub fn held_inputs(study: &Study, fixed: &BTreeMap<String, f64>) -> Result<InputModel> {
+    let mut inputs = study.inputs.clone();
     for (name, value) in fixed {
         let speed = if name == "wind_speed" { WindLoads::check_speed(*value) } else { Ok(()) };
         inputs = speed.and_then(|()| inputs.with_fixed(name, *value)).map_err(|error| match error {

@@ -15,9 +15,10 @@ use super::store::{Store, TaskRow};
 use super::{AppState, CalibrationRequest, ValidationJob};
 use crate::analysis::validate;
 use crate::error::{Error, Result};
-use crate::problem::Problem;
+use crate::progress::{Observer, Progress, Silent};
+use crate::study::Study;
 use crate::surrogate::phases::{CalibrationPlan, ExperimentFit, assemble, fit_experiments, plan};
-use crate::surrogate::{CalibrationOptions, Metamodel, Observer, Progress, Silent, StageSeconds};
+use crate::surrogate::{CalibrationOptions, Metamodel, StageSeconds};
 use serde::{Deserialize, Serialize};
 use std::future::Future;
 use std::pin::Pin;
@@ -114,8 +115,8 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
     let mut work = tokio::task::spawn_blocking(move || -> Result<Vec<ExperimentFit>> {
         let request: TaskRequest =
             serde_json::from_str(&task.request).map_err(|e| Error::invalid("task", e.to_string()))?;
-        let (problem, options) = request.calibration.resolve(&config)?;
-        fit_experiments(&problem, &options, &request.plan, &request.experiments, 0, observer.as_ref())
+        let (study, options) = request.calibration.resolve(&config)?;
+        fit_experiments(&study, &options, &request.plan, &request.experiments, 0, observer.as_ref())
     });
     let mut ticker = tokio::time::interval(Duration::from_secs(1));
     let mut lease = LeaseKeeper::claimed(state.config.lease_ms);
@@ -180,7 +181,7 @@ async fn blocking<T: Send + 'static>(work: impl FnOnce() -> Result<T> + Send + '
 }
 
 /// A stored metamodel and its study, for jobs that sample it.
-async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Problem)> {
+async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Study)> {
     let body = store
         .metamodel_body(id)
         .await
@@ -188,8 +189,8 @@ async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Problem
         .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
     blocking(move || {
         let metamodel = Metamodel::from_json(&body)?;
-        let problem = metamodel.problem()?;
-        Ok((metamodel, problem))
+        let study = metamodel.study()?;
+        Ok((metamodel, study))
     })
     .await
 }
@@ -211,34 +212,34 @@ async fn prepare(
         "calibration" => {
             let request: CalibrationRequest = parse(request)?;
             let (checked, config) = (request.clone(), state.config.clone());
-            let (problem, options) = blocking(move || checked.resolve(&config)).await?;
+            let (study, options) = blocking(move || checked.resolve(&config)).await?;
             let work =
-                coordinate(state.clone(), id.to_string(), owner.to_string(), request, problem, options, supervision);
+                coordinate(state.clone(), id.to_string(), owner.to_string(), request, study, options, supervision);
             Ok(Box::pin(work))
         }
         "validation" => {
             let job: ValidationJob = parse(request)?;
-            let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            let (metamodel, study) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
-                let inputs = held_inputs(&problem, &job.fixed)?;
-                let report = validate(&metamodel, &problem, &inputs, job.samples, job.seed, supervision.as_ref())?;
-                Ok((JobOutput::Answer(serde_json::to_string(&report).expect("a report serialises")), problem.name))
+                let inputs = held_inputs(&study, &job.fixed)?;
+                let report = validate(&metamodel, &study, &inputs, job.samples, job.seed, supervision.as_ref())?;
+                Ok((JobOutput::Answer(serde_json::to_string(&report).expect("a report serialises")), study.name))
             })))
         }
         "exceedance" => {
             let job: ExceedanceJob = parse(request)?;
-            let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            let (metamodel, study) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
-                let answer = job.request.answer(&metamodel, &problem, &job.metamodel_id, supervision.as_ref())?;
-                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("a curve serialises")), problem.name))
+                let answer = job.request.answer(&metamodel, &study, &job.metamodel_id, supervision.as_ref())?;
+                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("a curve serialises")), study.name))
             })))
         }
         "hazard" | "fragility" | "sensitivity" => {
             let job: AnalysisJob = parse(request)?;
-            let (metamodel, problem) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            let (metamodel, study) = stored_metamodel(&state.store, &job.metamodel_id).await?;
             Ok(Box::pin(blocking(move || {
-                let answer = job.request.answer(&metamodel, &problem, &job.metamodel_id, supervision.as_ref())?;
-                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")), problem.name))
+                let answer = job.request.answer(&metamodel, &study, &job.metamodel_id, supervision.as_ref())?;
+                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")), study.name))
             })))
         }
         other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
@@ -270,15 +271,15 @@ async fn coordinate(
     id: String,
     owner: String,
     request: CalibrationRequest,
-    problem: Problem,
+    study: Study,
     options: CalibrationOptions,
     supervision: Arc<Supervision>,
 ) -> Result<(JobOutput, String)> {
-    let problem = Arc::new(problem);
+    let study = Arc::new(study);
     let options = Arc::new(options);
     let planned = {
-        let (problem, options, supervision) = (problem.clone(), options.clone(), supervision.clone());
-        Arc::new(blocking(move || plan(&problem, &options, supervision.as_ref())).await?)
+        let (study, options, supervision) = (study.clone(), options.clone(), supervision.clone());
+        Arc::new(blocking(move || plan(&study, &options, supervision.as_ref())).await?)
     };
     let started = Instant::now();
     let remaining = planned.plan.remaining();
@@ -328,8 +329,8 @@ async fn coordinate(
         fits.extend(chunk);
     }
     let seconds = StageSeconds { coefficients: started.elapsed().as_secs_f64(), ..planned.seconds.clone() };
-    let name = problem.name.clone();
-    let metamodel = blocking(move || assemble(&problem, &options, &planned, fits, seconds, &Silent)).await?;
+    let name = study.name.clone();
+    let metamodel = blocking(move || assemble(&study, &options, &planned, fits, seconds, &Silent)).await?;
     Ok((JobOutput::Metamodel(Box::new(metamodel)), name))
 }
 

@@ -14,13 +14,11 @@ mod store;
 
 pub use config::{Role, ServeArgs};
 pub use routes::{openapi, openapi_for};
-#[cfg(any(test, feature = "test-support"))]
-pub use store::testing;
 
 use crate::analysis::ClimateCoverage;
 use crate::error::{Error, Result};
-use crate::problem::{Problem, ProblemSpec};
 use crate::structure::CustomStructure;
+use crate::study::{Study, StudySpec};
 use crate::surrogate::{CalibrationCost, CalibrationOptions, Refinement, WindCoverage, design};
 use crate::uncertainty::Marginal;
 use crate::wind::WindSite;
@@ -76,7 +74,7 @@ pub struct CalibrationRequest {
     pub damper_exponent: Option<f64>,
     /// Modes kept in the reduced model (3 in the paper), at most 10 and the structure's floors.
     #[schema(minimum = 1, maximum = 10)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub modes: Option<usize>,
     /// Storm length (s); 900 in the paper, at most a day. With the time step it sets the steps per
     /// storm (at most 10⁷), which with the experiments are checked against the server's budget.
@@ -88,9 +86,9 @@ pub struct CalibrationRequest {
     /// Reference runs on the Latin hypercube (K; 200 in the paper), at most the server's
     /// `--max-experiments` (1000 by default).
     #[schema(minimum = 4, maximum = 5000)]
-    #[serde(default, deserialize_with = "crate::whole::optional_count")]
+    #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub experiments: Option<usize>,
-    #[serde(default, deserialize_with = "crate::whole::optional_seed")]
+    #[serde(default, deserialize_with = "crate::count::optional_seed")]
     pub seed: Option<u64>,
     pub narx: Option<crate::surrogate::narx::NarxOptions>,
     pub pce: Option<crate::surrogate::pce::PceOptions>,
@@ -105,13 +103,13 @@ pub struct CalibrationRequest {
 
 impl CalibrationRequest {
     /// The study and the options, checked; errors name the field.
-    pub fn resolve(&self, config: &ServeArgs) -> Result<(Problem, CalibrationOptions)> {
+    pub fn resolve(&self, config: &ServeArgs) -> Result<(Study, CalibrationOptions)> {
         let preset = if self.preset.is_none() && self.structure.is_none() {
-            Some(crate::problem::DEFAULT_PRESET.into())
+            Some(crate::study::DEFAULT_PRESET.into())
         } else {
             self.preset.clone()
         };
-        let spec = ProblemSpec {
+        let spec = StudySpec {
             preset,
             structure: self.structure.clone(),
             inputs: self.inputs.clone(),
@@ -121,7 +119,7 @@ impl CalibrationRequest {
             duration_s: self.duration_s,
             time_step_s: self.time_step_s,
         };
-        let problem = Problem::from_spec(&spec)?;
+        let study = Study::from_spec(&spec)?;
         let defaults = CalibrationOptions::default();
         let options = CalibrationOptions {
             experiments: self.experiments.unwrap_or(defaults.experiments),
@@ -141,14 +139,14 @@ impl CalibrationRequest {
         };
         options.validate()?;
         if options.cover_wind_speeds.is_some() {
-            design(&problem, &options)?; // the range inside the wind speed's support
+            design(&study, &options)?; // the range inside the wind speed's support
         }
         if options.experiments > config.max_experiments {
             return Err(Error::invalid("experiments", format!("at most {} on this server", config.max_experiments)));
         }
-        CalibrationCost::estimate(&problem, &options, rayon::current_num_threads())
+        CalibrationCost::estimate(&study, &options, rayon::current_num_threads())
             .check(config.max_job_memory_mb as f64 * 1024.0 * 1024.0, config.max_job_steps as f64)?;
-        Ok((problem, options))
+        Ok((study, options))
     }
 }
 
@@ -158,10 +156,10 @@ impl CalibrationRequest {
 pub struct ValidationRequest {
     /// Fresh Monte Carlo samples, each one reference storm.
     #[schema(minimum = 2, maximum = 5000, default = 200)]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub samples: usize,
     #[schema(default = 1000)]
-    #[serde(deserialize_with = "crate::whole::seed")]
+    #[serde(deserialize_with = "crate::count::seed")]
     pub seed: u64,
     /// Inputs held, by name: `{"wind_speed": 60}` validates at one end of a calibrated range.
     #[schema(schema_with = schema::fixed_inputs_schema)]

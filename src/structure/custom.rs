@@ -23,11 +23,11 @@ pub const MAX_DAMPERS: usize = 4 * MAX_FLOORS;
 pub struct CustomDamper {
     /// Upper floor of the damper (1-based); it joins this floor to the one below (or the ground).
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 200))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub floor: usize,
     /// Coefficient group (1-based): dampers of a group share the input `damper_c{group}`.
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 10))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub group: usize,
     /// Cosine of the brace angle to the horizontal (1 for a horizontal damper).
     #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 1))]

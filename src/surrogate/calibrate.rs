@@ -6,19 +6,19 @@
 use super::metamodel::{Metamodel, StageSeconds};
 use super::options::CalibrationOptions;
 use super::phases::{assemble, fit_experiments, plan};
-use super::progress::Observer;
 use crate::error::Result;
-use crate::problem::Problem;
+use crate::progress::Observer;
+use crate::study::Study;
 use std::time::Instant;
 
-/// Calibrates a PC-NARX metamodel of `problem` (with its storm grid and input model) on this
+/// Calibrates a PC-NARX metamodel of `study` (with its storm grid and input model) on this
 /// machine: the three phases of [`super::phases`], every experiment fitted here.
-pub fn calibrate(problem: &Problem, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Metamodel> {
-    let planned = plan(problem, options, observer)?;
+pub fn calibrate(study: &Study, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Metamodel> {
+    let planned = plan(study, options, observer)?;
     let stage = Instant::now();
     let mut fits = planned.fit_selection(options, observer)?;
     let remaining = planned.plan.remaining();
-    fits.extend(fit_experiments(problem, options, &planned.plan, &remaining, planned.plan.selection.len(), observer)?);
+    fits.extend(fit_experiments(study, options, &planned.plan, &remaining, planned.plan.selection.len(), observer)?);
     let seconds = StageSeconds { coefficients: stage.elapsed().as_secs_f64(), ..planned.seconds.clone() };
-    assemble(problem, options, &planned, fits, seconds, observer)
+    assemble(study, options, &planned, fits, seconds, observer)
 }

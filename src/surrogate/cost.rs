@@ -11,7 +11,7 @@
 
 use super::CalibrationOptions;
 use crate::error::{Error, Result};
-use crate::problem::Problem;
+use crate::study::Study;
 
 /// Measured peak resident size over the estimate of the buffers (1.7-1.8), rounded up.
 const MEMORY_OVERHEAD: f64 = 2.0;
@@ -34,16 +34,16 @@ pub struct CalibrationCost {
 }
 
 impl CalibrationCost {
-    /// The cost of calibrating `problem` with `options` on `threads` worker threads.
-    pub fn estimate(problem: &Problem, options: &CalibrationOptions, threads: usize) -> CalibrationCost {
+    /// The cost of calibrating `study` with `options` on `threads` worker threads.
+    pub fn estimate(study: &Study, options: &CalibrationOptions, threads: usize) -> CalibrationCost {
         const F64: f64 = 8.0;
-        let steps = problem.storm.steps() as f64;
-        let modes = problem.modes.count() as f64;
+        let steps = study.storm.steps() as f64;
+        let modes = study.modes.count() as f64;
         let threads = threads.max(1) as f64;
-        let site = &problem.wind.site;
-        let generation_points = problem.storm.duration / site.field_generation_step_s + 4.0;
+        let site = &study.wind.site;
+        let generation_points = study.storm.duration / site.field_generation_step_s + 4.0;
         let transform_points = site.generation_transform_points();
-        let inputs = problem.inputs.inputs.len();
+        let inputs = study.inputs.inputs.len();
         let pce_basis = options.pce.basis_size_bound(inputs);
         let terms = options.narx.max_terms as f64;
         let selection = options.selection_experiments.min(options.experiments) as f64;
@@ -114,24 +114,24 @@ mod tests {
 
     #[test]
     fn the_papers_calibration_fits_the_default_budget_and_a_huge_one_does_not() {
-        let problem = Problem::preset("frame40-kn").unwrap();
+        let study = Study::preset("frame40-kn").unwrap();
         let options = CalibrationOptions::default();
-        let cost = CalibrationCost::estimate(&problem, &options, 2);
+        let cost = CalibrationCost::estimate(&study, &options, 2);
         assert_eq!(cost.storm_steps, 200.0 * 90_001.0);
         assert_eq!(cost.pce_basis, 1341.0);
         // The buffers (0.164 GB) times the overhead: above the 0.29 GB measured, within the budget.
         assert!((cost.memory_bytes - 2.0 * 0.1645e9).abs() < 0.005e9, "{cost:?}");
         assert!(cost.check(4096.0 * MIB, 1e9).is_ok());
 
-        let day = problem.clone().with_storm(86_400.0, 0.01).unwrap();
+        let day = study.clone().with_storm(86_400.0, 0.01).unwrap();
         let error = CalibrationCost::estimate(&day, &options, 2).check(4096.0 * MIB, 1e12).unwrap_err();
         assert!(error.to_string().starts_with("duration_s: the calibration would need about"), "{error}");
-        let error = CalibrationCost::estimate(&problem, &options, 2).check(4096.0 * MIB, 1e6).unwrap_err();
+        let error = CalibrationCost::estimate(&study, &options, 2).check(4096.0 * MIB, 1e6).unwrap_err();
         assert!(error.to_string().starts_with("experiments:"), "{error}");
 
         let mut wide = options.clone();
         wide.pce.max_interaction = 8;
-        let error = CalibrationCost::estimate(&problem, &wide, 2).check(4096.0 * MIB, 1e9).unwrap_err();
+        let error = CalibrationCost::estimate(&study, &wide, 2).check(4096.0 * MIB, 1e9).unwrap_err();
         assert!(error.to_string().starts_with("pce:"), "{error}");
     }
 }

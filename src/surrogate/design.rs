@@ -18,7 +18,7 @@
 
 use super::options::{CalibrationOptions, WindCoverage};
 use crate::error::{Error, Result};
-use crate::problem::Problem;
+use crate::study::Study;
 use crate::uncertainty::{Marginal, latin_hypercube, rng_from_seed};
 
 impl WindCoverage {
@@ -53,14 +53,14 @@ pub struct Design {
 
 /// The design: a function of the input model and the options alone, so a stored metamodel can say
 /// where it was calibrated.
-pub fn design(problem: &Problem, options: &CalibrationOptions) -> Result<Design> {
-    let mut points = latin_hypercube(&problem.inputs, options.experiments, &mut rng_from_seed(options.seed));
+pub fn design(study: &Study, options: &CalibrationOptions) -> Result<Design> {
+    let mut points = latin_hypercube(&study.inputs, options.experiments, &mut rng_from_seed(options.seed));
     let Some(coverage) = options.cover_wind_speeds else {
         return Ok(Design { weights: vec![1.0; points.len()], points });
     };
     coverage.validate()?;
-    let index = problem.inputs.index_of("wind_speed")?;
-    let marginal = *problem.inputs.marginal("wind_speed")?;
+    let index = study.inputs.index_of("wind_speed")?;
+    let marginal = *study.inputs.marginal("wind_speed")?;
     if matches!(marginal, Marginal::Constant { .. }) {
         return Err(Error::invalid("cover_wind_speeds", "the study holds wind_speed fixed; there is nothing to cover"));
     }
@@ -87,8 +87,8 @@ pub fn design(problem: &Problem, options: &CalibrationOptions) -> Result<Design>
 mod tests {
     use super::*;
 
-    fn problem() -> Problem {
-        Problem::preset("frame40-kn").unwrap()
+    fn study() -> Study {
+        Study::preset("frame40-kn").unwrap()
     }
 
     fn covering(lower: f64, upper: f64) -> CalibrationOptions {
@@ -103,8 +103,8 @@ mod tests {
     #[test]
     fn plain_design_is_the_hypercube() {
         let options = CalibrationOptions { experiments: 50, ..CalibrationOptions::default() };
-        let d = design(&problem(), &options).unwrap();
-        let plain = latin_hypercube(&problem().inputs, 50, &mut rng_from_seed(options.seed));
+        let d = design(&study(), &options).unwrap();
+        let plain = latin_hypercube(&study().inputs, 50, &mut rng_from_seed(options.seed));
         assert_eq!(d.points, plain);
         assert!(d.weights.iter().all(|&w| w == 1.0));
     }
@@ -115,11 +115,11 @@ mod tests {
     /// standard deviation of the speeds are the Fréchet's 30 and 3.5 m/s within sampling error.
     #[test]
     fn covering_design_spans_the_range_and_weights_restore_the_input_model() {
-        let problem = problem();
-        let index = problem.inputs.index_of("wind_speed").unwrap();
-        let d = design(&problem, &covering(30.0, 75.0)).unwrap();
+        let study = study();
+        let index = study.inputs.index_of("wind_speed").unwrap();
+        let d = design(&study, &covering(30.0, 75.0)).unwrap();
         let speeds: Vec<f64> = d.points.iter().map(|x| x[index]).collect();
-        let marginal = problem.inputs.marginal("wind_speed").unwrap();
+        let marginal = study.inputs.marginal("wind_speed").unwrap();
         let beyond = marginal.upper_quantile(1e-3);
         let far = speeds.iter().filter(|&&v| v > beyond).count() as f64;
         let expected = 0.5 * 2000.0 * (75.0 - beyond) / 45.0 + 0.5 * 2000.0 * 1e-3;
@@ -134,23 +134,23 @@ mod tests {
         assert!((mean - 30.0).abs() < 0.1, "weighted mean {mean}");
         assert!((var.sqrt() - 3.5).abs() < 0.15, "weighted sd {}", var.sqrt());
         // The other inputs keep their hypercube.
-        let plain = latin_hypercube(&problem.inputs, 2000, &mut rng_from_seed(1));
+        let plain = latin_hypercube(&study.inputs, 2000, &mut rng_from_seed(1));
         assert!(d.points.iter().zip(&plain).all(|(a, b)| (0..a.len()).all(|i| i == index || a[i] == b[i])));
     }
 
     #[test]
     fn coverage_is_checked() {
-        let problem = problem();
+        let study = study();
         for (lower, upper, says) in [
             (40.0, 30.0, "must be below upper"),
             (0.0, 30.0, "must be speeds"),
             (30.0, f64::NAN, "must be speeds"),
             (30.0, 200.0, "must be speeds"),
         ] {
-            let error = design(&problem, &covering(lower, upper)).unwrap_err().to_string();
+            let error = design(&study, &covering(lower, upper)).unwrap_err().to_string();
             assert!(error.contains("cover_wind_speeds") && error.contains(says), "{error}");
         }
-        let mut held = problem.clone();
+        let mut held = study.clone();
         held.inputs = held.inputs.with_fixed("wind_speed", 30.0).unwrap();
         assert!(design(&held, &covering(30.0, 60.0)).unwrap_err().to_string().contains("holds wind_speed fixed"));
     }

@@ -4,8 +4,8 @@
 
 use super::lars::lars_path;
 use super::narx::{Exogenous, NarxTerm, free_run, regressors, relative_error, rest_output};
-use crate::cancel::{Cancel, check};
 use crate::error::{Error, Result};
+use crate::progress::{Observer, check};
 use faer::prelude::SolveLstsq;
 use faer::{Mat, MatRef};
 use rayon::prelude::*;
@@ -124,7 +124,7 @@ pub fn least_squares(terms: &[NarxTerm], record: &Record) -> Result<Vec<f64>> {
 
 /// A record's one-step regression over a whole dictionary, compressed to the triangular factor R of
 /// the QR of [X | y]. Since X = Q R₁ and y = Q z + r with r orthogonal to every column, the least
-/// squares of any subset S of the dictionary is the small problem min ‖R_S θ − z‖ on the columns S
+/// squares of any subset S of the dictionary is the small study min ‖R_S θ − z‖ on the columns S
 /// of R: the same solution as on the whole record, at O(p³) per candidate instead of O(n p²).
 pub struct CompressedRegression {
     terms: Vec<NarxTerm>,
@@ -194,7 +194,7 @@ pub fn select_structure(
     records: &[Record],
     evaluation: &[Record],
     max_terms: usize,
-    cancel: &dyn Cancel,
+    observer: &dyn Observer,
 ) -> Result<StructureChoice> {
     let non_constant: Vec<NarxTerm> = dictionary.iter().copied().filter(|t| !t.is_constant()).collect();
     let has_constant = dictionary.iter().any(NarxTerm::is_constant);
@@ -222,7 +222,7 @@ pub fn select_structure(
     // Each candidate costs a free run of every evaluation record; once a stop is requested the
     // remaining ones are skipped (scored infinite) and the stop is reported below.
     let mean_error = |terms: &[NarxTerm]| -> f64 {
-        if cancel.requested() {
+        if observer.cancelled() {
             return f64::INFINITY;
         }
         let total: f64 = evaluation
@@ -234,7 +234,7 @@ pub fn select_structure(
     };
     let scored: Vec<(f64, Vec<NarxTerm>)> =
         candidates.par_iter().map(|terms| (mean_error(terms), terms.clone())).filter(|(e, _)| e.is_finite()).collect();
-    check(cancel)?;
+    check(observer)?;
     let best = scored.iter().map(|(e, _)| *e).fold(f64::INFINITY, f64::min);
     let tolerance = best * PARSIMONY_FACTOR + 1e-15;
     let (mut error, mut terms) = scored
@@ -263,14 +263,14 @@ pub fn select_structure(
             _ => break,
         }
     }
-    check(cancel)?;
+    check(observer)?;
     Ok(StructureChoice { terms, error, candidates: candidates.len() })
 }
 
 #[cfg(test)]
 pub(super) mod tests {
     use super::*;
-    use crate::cancel::Never;
+    use crate::progress::Silent;
     use crate::surrogate::narx::NarxOptions;
     use crate::uncertainty::rng_from_seed;
     use rand::RngExt;
@@ -301,7 +301,8 @@ pub(super) mod tests {
     fn identification_recovers_a_known_arx_model() {
         let (terms, theta) = arx();
         let records: Vec<Record> = (1..=3).map(|seed| record(&theta, &terms, seed)).collect();
-        let choice = select_structure(&NarxOptions::default().dictionary(0, 1), &records, &records, 8, &Never).unwrap();
+        let choice =
+            select_structure(&NarxOptions::default().dictionary(0, 1), &records, &records, 8, &Silent).unwrap();
         let mut truth = terms.clone();
         truth.sort();
         assert_eq!(choice.terms, truth);

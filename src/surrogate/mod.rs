@@ -6,7 +6,6 @@ mod calibrate;
 mod cost;
 mod design;
 pub mod identify;
-mod lanes;
 pub mod lars;
 mod metamodel;
 pub mod narx;
@@ -14,23 +13,16 @@ mod options;
 mod parametrization;
 pub mod pce;
 pub mod phases;
-mod progress;
+mod prediction;
 mod refine;
 
-/// Proof that the processor has AVX-512F and FMA, for the loops compiled for it.
-#[cfg(target_arch = "x86_64")]
-pub(crate) use batch::Avx512Isa;
-pub use batch::Workspace as BatchWorkspace;
+pub use batch::{BatchInput, BatchWorkspace, ModalScales, MotionSink, Reduction};
 pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};
 pub use design::{Design, design};
-pub use lanes::LANES;
-pub use lanes::Lanes;
 pub use metamodel::{
-    BatchInput, CalibrationSummary, Metamodel, ModalBasis, ModalScales, ModeDiagnostics, ModeModel, MotionSink,
-    Reduction, StageSeconds, StaticResponse,
+    CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds, StaticResponse,
 };
 pub use options::{CalibrationOptions, MAX_EXPERIMENTS, WindCoverage};
 pub use parametrization::Parametrization;
-pub use progress::{Observer, Progress, Silent};
 pub use refine::Refinement;

@@ -101,30 +101,30 @@ impl fmt::Display for NarxTerm {
 pub struct NarxOptions {
     /// Largest total degree l₁ + l₂ of a term.
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 5))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub max_degree: u32,
     /// Output lags 1 ..= output_lags.
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 10))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub output_lags: usize,
     /// Input lags 0 ..= input_lags.
     #[cfg_attr(feature = "openapi", schema(minimum = 0, maximum = 10))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub input_lags: usize,
     /// Largest power of the input in a term (at most `max_degree`).
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 5))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub max_input_power: u32,
     /// Whether products of an output power and an input power are candidates.
     pub cross_terms: bool,
     /// Most terms in a selected model (the constant included).
     #[cfg_attr(feature = "openapi", schema(minimum = 2, maximum = 30))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub max_terms: usize,
     /// Lags 1 ..= coupling_lags of every other retained mode's displacement as candidates (0: each
     /// mode on its own, as in the paper).
     #[cfg_attr(feature = "openapi", schema(minimum = 0, maximum = 10))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub coupling_lags: usize,
 }
 

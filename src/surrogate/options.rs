@@ -6,7 +6,7 @@ use super::narx::NarxOptions;
 use super::pce::PceOptions;
 use super::refine::Refinement;
 use crate::error::{Error, Result};
-use crate::problem::WindPath;
+use crate::study::WindPath;
 use serde::{Deserialize, Serialize};
 
 /// Everything about a calibration that is not the study itself; the defaults are the paper's.

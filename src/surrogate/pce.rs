@@ -7,9 +7,9 @@
 //! Gaussian standard space, Legendre for the uniform one); held inputs take no part.
 
 use super::lars::lars_path;
-use crate::cancel::{Cancel, check};
 use crate::error::{Error, Result};
 use crate::linalg::{cholesky, cholesky_solve, forward_substitute};
+use crate::progress::{Observer, check};
 use crate::uncertainty::{InputModel, StandardSpace};
 use serde::{Deserialize, Serialize};
 
@@ -20,22 +20,22 @@ use serde::{Deserialize, Serialize};
 pub struct PceOptions {
     /// Largest total degree tried.
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 20))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub max_degree: usize,
     /// q of the hyperbolic truncation (1 = total degree).
     #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 1))]
     pub q_norm: f64,
     /// Most inputs in one polynomial term.
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 14))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub max_interaction: usize,
     /// Stop raising the degree after this many degrees without improvement.
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 20))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub degree_early_stop: usize,
     /// Stop a LARS path after this many steps without a better corrected LOO error.
     #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 1000))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub lars_early_stop: usize,
 }
 
@@ -237,7 +237,7 @@ impl SparsePce {
         targets: &[f64],
         weights: &[f64],
         options: &PceOptions,
-        cancel: &dyn Cancel,
+        observer: &dyn Observer,
     ) -> Result<SparsePce> {
         options.validate()?;
         let n = targets.len();
@@ -249,7 +249,7 @@ impl SparsePce {
         }
         let families: Vec<StandardSpace> = model.inputs.iter().map(|i| i.marginal.standard_space()).collect();
         let active: Vec<usize> = (0..families.len()).filter(|&i| families[i] != StandardSpace::Fixed).collect();
-        // Rows scaled by √w turn the weighted problem into an ordinary one; weights of mean 1 keep
+        // Rows scaled by √w turn the weighted study into an ordinary one; weights of mean 1 keep
         // the corrected LOO error a mean over the experiments.
         let mean_weight = weights.iter().sum::<f64>() / n as f64;
         let row_scales: Vec<f64> = weights.iter().map(|w| (w / mean_weight).sqrt()).collect();
@@ -273,7 +273,7 @@ impl SparsePce {
             let terms = candidate_terms(&active, degree, options.q_norm, options.max_interaction);
             let basis = Basis { families: &families, terms: &terms, degree };
             let rows = Rows { tables: &tables, targets, scales: &row_scales };
-            let candidate = fit_basis(&basis, &rows, variance, options.lars_early_stop, cancel)?;
+            let candidate = fit_basis(&basis, &rows, variance, options.lars_early_stop, observer)?;
             match (&best, candidate) {
                 (_, None) => since_improvement += 1,
                 (None, Some(c)) => best = Some(c),
@@ -309,7 +309,7 @@ fn fit_basis(
     rows: &Rows<'_>,
     variance: f64,
     early_stop: usize,
-    cancel: &dyn Cancel,
+    observer: &dyn Observer,
 ) -> Result<Option<SparsePce>> {
     let Basis { families, terms, degree } = *basis;
     let Rows { tables, targets, scales } = *rows;
@@ -340,7 +340,7 @@ fn fit_basis(
     let standard = |r: usize, c: usize| (psi[r * p + c + 1] - means[c] * scales[r]) / norms[c];
     let mut gram = vec![0.0; cols * cols];
     for i in 0..cols {
-        check(cancel)?;
+        check(observer)?;
         for j in 0..=i {
             let v: f64 = (0..n).map(|r| standard(r, i) * standard(r, j)).sum();
             gram[i * cols + j] = v;
@@ -352,7 +352,7 @@ fn fit_basis(
     let mut best: Option<(f64, Vec<usize>, Vec<f64>)> = None;
     let mut since_improvement = 0;
     for step in &path {
-        check(cancel)?;
+        check(observer)?;
         let selected: Vec<usize> = std::iter::once(0).chain(step.active.iter().map(|&c| c + 1)).collect();
         if let Some((error, coefficients)) = least_squares_loo(&psi, p, &selected, &y, variance) {
             if best.as_ref().is_none_or(|b| error < b.0) {
@@ -431,7 +431,7 @@ fn least_squares_loo(psi: &[f64], p: usize, selected: &[usize], y: &[f64], varia
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cancel::Never;
+    use crate::progress::Silent;
     use crate::uncertainty::{Input, Marginal, latin_hypercube, rng_from_seed};
     use std::f64::consts::PI;
 
@@ -509,7 +509,7 @@ mod tests {
             x.iter().map(|x| x[0].sin() + 7.0 * x[1].sin().powi(2) + 0.1 * x[2].powi(4) * x[0].sin()).collect();
         let xi: Vec<Vec<f64>> = x.iter().map(|x| model.to_standard(x)).collect();
         let options = PceOptions { max_degree: 14, max_interaction: 3, ..Default::default() };
-        let pce = SparsePce::fit(&model, &xi, &y, &[1.0; 400], &options, &Never).unwrap();
+        let pce = SparsePce::fit(&model, &xi, &y, &[1.0; 400], &options, &Silent).unwrap();
         let variance = 49.0 / 8.0 + 0.1 * PI.powi(4) / 5.0 + 0.01 * PI.powi(8) / 18.0 + 0.5;
         assert!((pce.mean() / 3.5 - 1.0).abs() < 0.01, "mean {}", pce.mean());
         assert!((pce.variance() / variance - 1.0).abs() < 0.02, "variance {} vs {variance}", pce.variance());
@@ -559,12 +559,12 @@ mod tests {
             let term: Term = if degree == 0 { vec![] } else { vec![(0, degree)] };
             pce.terms.iter().position(|t| *t == term).map_or(0.0, |i| pce.coefficients[i])
         };
-        let weighted = SparsePce::fit(&model, &xi, &y, &weights, &options, &Never).unwrap();
+        let weighted = SparsePce::fit(&model, &xi, &y, &weights, &options, &Silent).unwrap();
         for (degree, exact) in [(0, 0.0), (1, 3.0), (2, 0.0)] {
             let c = coefficient(&weighted, degree);
             assert!((c - exact).abs() < 0.2, "weighted ψ{degree}: {c} vs {exact}");
         }
-        let unweighted = SparsePce::fit(&model, &xi, &y, &vec![1.0; n], &options, &Never).unwrap();
+        let unweighted = SparsePce::fit(&model, &xi, &y, &vec![1.0; n], &options, &Silent).unwrap();
         assert!(coefficient(&unweighted, 2) > 1.0, "unweighted ψ2: {}", coefficient(&unweighted, 2));
     }
 
@@ -588,7 +588,7 @@ mod tests {
                 2.0 + 0.5 * z[0] - 0.25 * he2 + 0.1 * z[0] * z[3]
             })
             .collect();
-        let pce = SparsePce::fit(&model, &xi, &y, &[1.0; 60], &PceOptions::default(), &Never).unwrap();
+        let pce = SparsePce::fit(&model, &xi, &y, &[1.0; 60], &PceOptions::default(), &Silent).unwrap();
         assert!((pce.mean() - 2.0).abs() < 1e-10);
         assert!((pce.variance() - (0.25 + 0.0625 + 0.01)).abs() < 1e-10);
         assert!(pce.terms.iter().all(|t| t.iter().all(|&(i, _)| i != 2)), "held input in {:?}", pce.terms);

@@ -21,13 +21,12 @@ use super::metamodel::{
 use super::narx::relative_error;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
-use super::progress::{Observer, Progress};
 use super::refine::refine;
-use crate::cancel::Cancel;
 use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};
-use crate::problem::Problem;
-use crate::wind::Workspace;
+use crate::progress::{Observer, Progress, check};
+use crate::study::Study;
+use crate::wind::TransformWorkspace;
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
@@ -79,23 +78,23 @@ struct Experiment {
 impl Experiment {
     /// Runs experiment `k` of the design through the reduced-order reference.
     fn run(
-        problem: &Problem,
+        study: &Study,
         options: &CalibrationOptions,
         x: &[f64],
         k: usize,
-        workspace: &mut Workspace,
-        cancel: &dyn Cancel,
+        workspace: &mut TransformWorkspace,
+        observer: &dyn Observer,
     ) -> Result<Experiment> {
-        let (p, coarse) = problem.sample_storm(x, options.wind, options.seed, k, workspace)?;
-        let forces = coarse.on_grid(&problem.storm);
-        let dampers = problem.dampers(&p)?;
+        let (p, coarse) = study.sample_storm(x, options.wind, options.seed, k, workspace)?;
+        let forces = coarse.on_grid(&study.storm);
+        let dampers = study.dampers(&p)?;
         let response = integrate_reduced(
-            &problem.sample_modes(&p),
+            &study.sample_modes(&p),
             p.damping_ratio,
             &dampers,
             &forces,
-            problem.storm.time_step,
-            cancel,
+            study.storm.time_step,
+            observer,
         )?;
         Ok(Experiment { q: forces.series, q_mean: forces.mean, y: response.displacements })
     }
@@ -122,7 +121,7 @@ impl Experiment {
         index: usize,
         plan: &CalibrationPlan,
         options: &CalibrationOptions,
-        cancel: &dyn Cancel,
+        observer: &dyn Observer,
     ) -> Result<ExperimentFit> {
         let coupled = coupled(options, plan.scales.len());
         let mut fit = ExperimentFit {
@@ -134,7 +133,7 @@ impl Experiment {
         };
         for (record, structure) in self.records(&plan.scales, coupled).iter().zip(&plan.structures) {
             let start = least_squares(&structure.terms, record)?;
-            let theta = refine(options.refinement, &structure.terms, start, record, cancel)?;
+            let theta = refine(options.refinement, &structure.terms, start, record, observer)?;
             let error = simulate(&structure.terms, &theta, record)
                 .map_or(f64::INFINITY, |y_hat| relative_error(&record.y, &y_hat));
             fit.coefficients.push(theta);
@@ -146,10 +145,6 @@ impl Experiment {
 
 fn coupled(options: &CalibrationOptions, modes: usize) -> bool {
     options.narx.coupling_lags > 0 && modes > 1
-}
-
-fn check_cancel(observer: &dyn Observer) -> Result<()> {
-    if observer.cancelled() { Err(Error::Cancelled) } else { Ok(()) }
 }
 
 /// Root mean square over every experiment and instant.
@@ -172,11 +167,10 @@ pub struct Planned {
 
 /// Phase 1: the design, the selection experiments through the reference (in parallel), the
 /// deviations' scales and every mode's structure.
-pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
+pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
     options.validate()?;
-    let cancel = || observer.cancelled();
     let started = Instant::now();
-    let design = design(problem, options)?.points;
+    let design = design(study, options)?.points;
     let k = design.len();
     let stride = (k as f64 / options.selection_experiments.min(k) as f64).max(1.0);
     let selection: Vec<usize> =
@@ -184,9 +178,9 @@ pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Obse
     let done = AtomicUsize::new(0);
     let experiments: Vec<Experiment> = selection
         .par_iter()
-        .map_init(Workspace::default, |workspace, &i| {
-            check_cancel(observer)?;
-            let experiment = Experiment::run(problem, options, &design[i], i, workspace, &cancel)?;
+        .map_init(TransformWorkspace::default, |workspace, &i| {
+            check(observer)?;
+            let experiment = Experiment::run(study, options, &design[i], i, workspace, observer)?;
             observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: k });
             Ok(experiment)
         })
@@ -195,7 +189,7 @@ pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Obse
     // The NARX works on deviations from the static state at rest under the mean load: y′ = y − y(0),
     // Q′ = Q − Q̄. Polynomial terms then act on the fluctuation, and the static level (a smooth
     // function of the inputs) gets its own expansion instead of hiding in a constant.
-    let modes = problem.modes.count();
+    let modes = study.modes.count();
     let scales: Vec<(f64, f64)> = (0..modes)
         .map(|m| {
             let y = pooled_rms(experiments.iter().map(|e| &e.y[m][..]), |e| experiments[e].y[m][0]);
@@ -207,11 +201,11 @@ pub fn plan(problem: &Problem, options: &CalibrationOptions, observer: &dyn Obse
     let records: Vec<Vec<Record>> = experiments.iter().map(|e| e.records(&scales, coupled(options, modes))).collect();
     let mut structures = Vec::new();
     for mode in 0..modes {
-        check_cancel(observer)?;
+        check(observer)?;
         observer.progress(Progress::Structure { mode: mode + 1 });
         let chosen: Vec<Record> = records.iter().map(|r| r[mode].clone()).collect();
         let dictionary = options.narx.dictionary(mode, modes);
-        structures.push(select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms, &cancel)?);
+        structures.push(select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms, observer)?);
     }
     seconds.structure = stage.elapsed().as_secs_f64();
     Ok(Planned { plan: CalibrationPlan { design, selection, scales, structures }, selection: experiments, seconds })
@@ -224,8 +218,8 @@ impl Planned {
             .par_iter()
             .zip(&self.plan.selection)
             .map(|(experiment, &index)| {
-                check_cancel(observer)?;
-                experiment.fit(index, &self.plan, options, &|| observer.cancelled())
+                check(observer)?;
+                experiment.fit(index, &self.plan, options, observer)
             })
             .collect()
     }
@@ -234,7 +228,7 @@ impl Planned {
 /// Phase 2: experiments `indices` of the plan through the reference and the NARX fit, in parallel.
 /// `done_before` experiments of the design were done already (for progress reports).
 pub fn fit_experiments(
-    problem: &Problem,
+    study: &Study,
     options: &CalibrationOptions,
     plan: &CalibrationPlan,
     indices: &[usize],
@@ -243,13 +237,12 @@ pub fn fit_experiments(
 ) -> Result<Vec<ExperimentFit>> {
     let done = AtomicUsize::new(done_before);
     let total = plan.design.len();
-    let cancel = || observer.cancelled();
     indices
         .par_iter()
-        .map_init(Workspace::default, |workspace, &k| {
-            check_cancel(observer)?;
+        .map_init(TransformWorkspace::default, |workspace, &k| {
+            check(observer)?;
             let x = plan.design.get(k).ok_or_else(|| Error::invalid("experiment", format!("no experiment {k}")))?;
-            let fit = Experiment::run(problem, options, x, k, workspace, &cancel)?.fit(k, plan, options, &cancel)?;
+            let fit = Experiment::run(study, options, x, k, workspace, observer)?.fit(k, plan, options, observer)?;
             observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
             Ok(fit)
         })
@@ -260,7 +253,7 @@ pub fn fit_experiments(
 /// the PC-NARX error on the selection experiments, and the metamodel. `fits` holds every
 /// experiment of the design, in any order.
 pub fn assemble(
-    problem: &Problem,
+    study: &Study,
     options: &CalibrationOptions,
     planned: &Planned,
     mut fits: Vec<ExperimentFit>,
@@ -268,14 +261,13 @@ pub fn assemble(
     observer: &dyn Observer,
 ) -> Result<Metamodel> {
     let started = Instant::now();
-    let cancel = || observer.cancelled();
     let plan = &planned.plan;
     fits.sort_by_key(|f| f.index);
     if fits.iter().map(|f| f.index).ne(0..plan.design.len()) {
         return Err(Error::Numerical("assembling needs one fit of every experiment of the design".into()));
     }
-    let xi: Vec<Vec<f64>> = plan.design.iter().map(|x| problem.inputs.to_standard(x)).collect();
-    let weights = design(problem, options)?.weights;
+    let xi: Vec<Vec<f64>> = plan.design.iter().map(|x| study.inputs.to_standard(x)).collect();
+    let weights = design(study, options)?.weights;
     if weights.len() != xi.len() {
         return Err(Error::Numerical("the plan's design is not the options' design".into()));
     }
@@ -285,7 +277,7 @@ pub fn assemble(
     let mut models = Vec::new();
     let mut diagnostics = Vec::new();
     for mode in 0..modes {
-        check_cancel(observer)?;
+        check(observer)?;
         observer.progress(Progress::Expansion { mode: mode + 1 });
         let (output_scale, input_scale) = plan.scales[mode];
         let structure = &plan.structures[mode];
@@ -301,7 +293,7 @@ pub fn assemble(
             .collect();
         let static_response = StaticResponse {
             per_unit_mean_load,
-            expansion: SparsePce::fit(&problem.inputs, &xi, &static_targets, &weights, &options.pce, &cancel)?,
+            expansion: SparsePce::fit(&study.inputs, &xi, &static_targets, &weights, &options.pce, observer)?,
         };
         let thetas: Vec<Vec<f64>> = fits.iter().map(|f| f.coefficients[mode].clone()).collect();
         let parametrization = options.parametrization.unwrap_or_else(|| Parametrization::choose(&terms, &thetas));
@@ -310,7 +302,7 @@ pub fn assemble(
             .into_par_iter()
             .map(|i| {
                 let targets: Vec<f64> = expanded.iter().map(|phi| phi[i]).collect();
-                SparsePce::fit(&problem.inputs, &xi, &targets, &weights, &options.pce, &cancel)
+                SparsePce::fit(&study.inputs, &xi, &targets, &weights, &options.pce, observer)
             })
             .collect::<Result<_>>()?;
 
@@ -357,11 +349,11 @@ pub fn assemble(
     seconds.expansion = started.elapsed().as_secs_f64();
     seconds.total = seconds.experiments + seconds.structure + seconds.coefficients + seconds.expansion;
     let count = diagnostics.len() as f64;
-    let modes = &problem.modes;
+    let modes = &study.modes;
     Ok(Metamodel {
         format: FORMAT.into(),
         version: FORMAT_VERSION,
-        problem: problem.resolved_spec(),
+        study: study.resolved_spec(),
         modes: ModalBasis {
             frequencies_rad_s: modes.frequencies.clone(),
             modal_masses_kg: modes.modal_masses.clone(),

@@ -4,9 +4,9 @@
 
 use super::identify::{Record, simulate};
 use super::narx::{NarxTerm, diverged, rest_output};
-use crate::cancel::Cancel;
 use crate::error::Result;
 use crate::optimise::{NormalEquations, levenberg_marquardt, nelder_mead};
+use crate::progress::Observer;
 use serde::{Deserialize, Serialize};
 
 /// How the coefficients are refined on the simulation error.
@@ -29,13 +29,13 @@ pub fn refine(
     terms: &[NarxTerm],
     theta: Vec<f64>,
     record: &Record,
-    cancel: &dyn Cancel,
+    observer: &dyn Observer,
 ) -> Result<Vec<f64>> {
     match method {
         Refinement::LevenbergMarquardt => {
-            levenberg_marquardt(theta, |theta| normal_equations(terms, theta, record), cancel)
+            levenberg_marquardt(theta, |theta| normal_equations(terms, theta, record), observer)
         }
-        Refinement::NelderMead => nelder_mead(theta, |theta| sum_of_squares(terms, theta, record), cancel),
+        Refinement::NelderMead => nelder_mead(theta, |theta| sum_of_squares(terms, theta, record), observer),
         Refinement::None => Ok(theta),
     }
 }
@@ -125,7 +125,7 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::cancel::Never;
+    use crate::progress::Silent;
     use crate::surrogate::identify::simulation_error;
     use crate::surrogate::identify::tests::{arx, record};
 
@@ -137,7 +137,7 @@ mod tests {
         let start: Vec<f64> = theta.iter().map(|v| v * 1.01).collect();
         assert!(simulation_error(&terms, &start, &data) > 1e-3);
         for method in [Refinement::LevenbergMarquardt, Refinement::NelderMead] {
-            let refined = refine(method, &terms, start.clone(), &data, &Never).unwrap();
+            let refined = refine(method, &terms, start.clone(), &data, &Silent).unwrap();
             let error = simulation_error(&terms, &refined, &data);
             assert!(error < 1e-8, "{method:?}: error {error}, θ = {refined:?}");
         }

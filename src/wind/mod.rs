@@ -3,18 +3,18 @@
 //! floor forces and modal forces — either projected from the full floor field or simulated directly
 //! from the projected cross-spectral matrix Φᵀ S_f Φ (the fast path, equal in law).
 
-mod forces;
+mod histories;
+mod loads;
 mod modal;
-mod pruned;
 mod site;
-mod source;
 mod spectral;
 mod spectrum;
+mod transform;
 
-pub use forces::{FloorForces, ModalForces, WindLoads};
-pub use modal::{CoarseModalForces, ModalWind};
-pub use pruned::Workspace;
+pub use histories::{CoarseModalForces, FloorForces, ForceSource, ModalForces};
+pub use loads::WindLoads;
+pub use modal::ModalWind;
 pub use site::{StormGrid, WindSite};
-pub use source::ForceSource;
 pub use spectral::{CoarseSeries, CrossSpectralDensity, CubicSchedule, SpectralGrid, simulate, simulate_coarse};
 pub use spectrum::{FieldSpectrum, ProjectedSpectrum};
+pub use transform::TransformWorkspace;

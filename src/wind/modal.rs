@@ -8,9 +8,11 @@
 //! is tabulated once per structure; a sample then costs a table look-up per frequency instead of a
 //! 40×40 coherence matrix projected at each of its 3·2048 frequencies.
 
-use super::spectral::{CoarseSeries, CrossSpectralDensity, SpectralGrid, simulate_coarse};
+use super::histories::{CoarseModalForces, ModalForces};
+use super::loads::WindLoads;
+use super::spectral::{CrossSpectralDensity, SpectralGrid, simulate_coarse};
 use super::spectrum::ProjectedSpectrum;
-use super::{ModalForces, StormGrid, WindLoads, Workspace};
+use super::{StormGrid, TransformWorkspace};
 use crate::error::Result;
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
@@ -165,34 +167,6 @@ impl CrossSpectralDensity for ScaledSpectrum<'_> {
     }
 }
 
-/// Modal forces on the generation grid, before interpolation to a storm's time step.
-#[derive(Debug, Clone)]
-pub struct CoarseModalForces {
-    /// Mean generalized force of each mode (N).
-    pub mean: Vec<f64>,
-    /// The fluctuating parts (N).
-    pub fluctuations: CoarseSeries,
-}
-
-impl CoarseModalForces {
-    /// Mode m's total force at instants first, first + 1, … of a grid of step `time_step`.
-    pub fn fill(&self, m: usize, time_step: f64, first: usize, out: &mut [f64]) {
-        self.fluctuations.interpolate_into(m, time_step, first, self.mean[m], out);
-    }
-
-    /// Every mode on `storm`'s grid.
-    pub fn on_grid(&self, storm: &StormGrid) -> ModalForces {
-        let series = (0..self.mean.len())
-            .map(|m| {
-                let mut out = vec![0.0; storm.steps()];
-                self.fill(m, storm.time_step, 0, &mut out);
-                out
-            })
-            .collect();
-        ModalForces { mean: self.mean.clone(), series }
-    }
-}
-
 /// The modal-force generator of one structure at one site.
 #[derive(Debug, Clone)]
 pub struct ModalWind {
@@ -226,7 +200,7 @@ impl ModalWind {
         &self,
         wind_speed: f64,
         duration: f64,
-        workspace: &mut Workspace,
+        workspace: &mut TransformWorkspace,
         rng: &mut Rng,
     ) -> Result<CoarseModalForces> {
         WindLoads::check_speed(wind_speed)?;
@@ -254,14 +228,14 @@ impl ModalWind {
 
     /// One storm on `storm`'s grid.
     pub fn forces(&self, wind_speed: f64, storm: &StormGrid, rng: &mut Rng) -> Result<ModalForces> {
-        Ok(self.simulate(wind_speed, storm.duration, &mut Workspace::default(), rng)?.on_grid(storm))
+        Ok(self.simulate(wind_speed, storm.duration, &mut TransformWorkspace::default(), rng)?.on_grid(storm))
     }
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::problem::Problem;
+    use crate::study::Study;
     use crate::uncertainty::rng_from_seed;
     use crate::wind::spectral::unit_phases;
     use rustfft::num_complex::Complex;
@@ -272,11 +246,13 @@ mod tests {
     /// standard deviation (the rounding seen is ~10⁻⁷ of it).
     #[test]
     fn single_precision_storm_equals_the_direct_sum() {
-        let p = Problem::preset("frame40").unwrap();
+        let p = Study::preset("frame40").unwrap();
         let wind = ModalWind::new(&p.wind, p.modes.shapes.as_ref());
         let (speed, seed) = (31.0, 3);
-        let coarse =
-            wind.simulate(speed, 900.0, &mut Workspace::default(), &mut rng_from_seed(seed)).unwrap().fluctuations;
+        let coarse = wind
+            .simulate(speed, 900.0, &mut TransformWorkspace::default(), &mut rng_from_seed(seed))
+            .unwrap()
+            .fluctuations;
         let grid = p.wind.grid();
         let (n, lines, dw) = (3, grid.lines, grid.step());
         let phases = unit_phases(&mut rng_from_seed(seed), n * lines);
@@ -316,7 +292,7 @@ mod tests {
     /// between the table's points, to 10⁻⁷ of the diagonal.
     #[test]
     fn table_equals_the_projected_spectrum_at_every_speed() {
-        let p = Problem::preset("frame40").unwrap();
+        let p = Study::preset("frame40").unwrap();
         let shapes = p.modes.shapes.as_ref();
         let wind = ModalWind::new(&p.wind, shapes);
         let mut worst = 0.0f64;
@@ -355,7 +331,7 @@ mod tests {
                 self.0.sweep(omega0, domega, count, visit)
             }
         }
-        let p = Problem::preset("frame40").unwrap();
+        let p = Study::preset("frame40").unwrap();
         let wind = ModalWind::new(&p.wind, p.modes.shapes.as_ref());
         let scaled = ScaledSpectrum { table: &wind.table, speed: 33.0 };
         let scheme = p.wind.grid().step();

@@ -38,7 +38,7 @@ pub struct WindSite {
     pub cutoff_rad_s: f64,
     /// Frequencies per component, N (81 920 phases for 40 floors means 2048).
     #[cfg_attr(feature = "openapi", schema(minimum = 16, maximum = 65536))]
-    #[serde(deserialize_with = "crate::whole::count")]
+    #[serde(deserialize_with = "crate::count::count")]
     pub frequencies: usize,
     /// Time step on which the wind (the full floor field, or the modal forces directly) is
     /// generated before cubic interpolation to the storm's time step (s); it must resolve the

@@ -9,7 +9,7 @@
 //! modulated rows are in [`super::pruned`].
 
 use super::StormGrid;
-use super::pruned::{Bin, Workspace};
+use super::transform::{Bin, TransformWorkspace};
 use crate::error::{Error, Result};
 use crate::linalg::cholesky_through_column;
 use crate::uncertainty::Rng;
@@ -194,7 +194,8 @@ pub fn simulate(
     storm: &StormGrid,
     rng: &mut Rng,
 ) -> Result<Vec<Vec<f64>>> {
-    Ok(simulate_coarse(csd, grid, generation_step, storm.duration, &mut Workspace::default(), rng)?.on_grid(storm))
+    Ok(simulate_coarse(csd, grid, generation_step, storm.duration, &mut TransformWorkspace::default(), rng)?
+        .on_grid(storm))
 }
 
 /// Simulates one realization over `duration` seconds on the generation grid only, with the
@@ -204,7 +205,7 @@ pub fn simulate_coarse(
     grid: &SpectralGrid,
     generation_step: f64,
     duration: f64,
-    workspace: &mut Workspace,
+    workspace: &mut TransformWorkspace,
     rng: &mut Rng,
 ) -> Result<CoarseSeries> {
     let n = csd.dim();

@@ -4,8 +4,8 @@
 use super::LaneModels;
 use crate::dynamics::sign_power;
 use crate::linalg::dot;
-use crate::problem::MAX_MODES;
-use crate::surrogate::{LANES, Lanes};
+use crate::simd::{LANES, Lanes};
+use crate::study::MAX_MODES;
 
 /// The modal damper forces g_m of the block's (step, lane) pairs computed exactly, shared by every
 /// floor's acceleration: `modal[i·LANES + l]`, valid where `stamps` holds the block's number.

@@ -2,7 +2,7 @@
 //! powers: the tests ahead of the exact evaluation in [`super::reduce_acceleration`].
 
 use super::BOUND_MARGIN;
-use crate::surrogate::{LANES, Lanes};
+use crate::simd::{LANES, Lanes};
 
 /// Whether a chunk's or a step's |L| and S = Σ_m K_m|ŷ'_m| could beat a lane's running peak,
 /// (1 + ε)(|L| + P S^α) > best, told without a power per test: |L| is placed on a grid of

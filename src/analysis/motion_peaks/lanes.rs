@@ -1,8 +1,9 @@
 //! The reduced models of a batch's samples as the acceleration sink reads them, every lane at once.
 
 use crate::error::Result;
-use crate::problem::Problem;
-use crate::surrogate::{LANES, Lanes, ModalScales};
+use crate::simd::{LANES, Lanes};
+use crate::study::Study;
+use crate::surrogate::ModalScales;
 
 /// The reduced models of a batch's samples, lane-major, with the blocks' scales folded in: the
 /// sink works on the scaled outputs ŷ_m and inputs q̂_m as the free run gives them, and on the
@@ -29,8 +30,8 @@ pub(super) struct LaneModels {
 }
 
 impl LaneModels {
-    pub(super) fn new(problem: &Problem, inputs: &[&[f64]], scales: &ModalScales) -> Result<Self> {
-        let modes = problem.modes.count();
+    pub(super) fn new(study: &Study, inputs: &[&[f64]], scales: &ModalScales) -> Result<Self> {
+        let modes = study.modes.count();
         let mut lanes = LaneModels {
             inverse_masses: vec![[0.0; LANES]; modes],
             load_gains: vec![[0.0; LANES]; modes],
@@ -42,11 +43,11 @@ impl LaneModels {
             velocity_columns: Vec::new(),
             map_columns: Vec::new(),
             lane_coefficients: Vec::new(),
-            exponent: problem.damper_exponent,
+            exponent: study.damper_exponent,
         };
         for (lane, x) in inputs.iter().enumerate() {
-            let p = problem.parameters(x)?;
-            let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p)?);
+            let p = study.parameters(x)?;
+            let (modes, dampers) = (study.sample_modes(&p), study.dampers(&p)?);
             for m in 0..modes.count() {
                 let omega = modes.frequencies[m];
                 lanes.inverse_masses[m][lane] = 1.0 / modes.modal_masses[m];

@@ -43,8 +43,8 @@ async fn analyse(
             job: serde_json::to_string(&AnalysisJob { metamodel_id: id, request }).expect("a job serialises"),
         }
     };
-    let work: Work = Box::new(move |metamodel, problem, observer, rendering| {
-        Ok(request.answer(metamodel, problem, &id, observer)?.render(rendering))
+    let work: Work = Box::new(move |metamodel, study, observer, rendering| {
+        Ok(request.answer(metamodel, study, &id, observer)?.render(rendering))
     });
     answer_or_queue(&state, &headers, loaded, storms, queued, work).await
 }

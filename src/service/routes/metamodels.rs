@@ -2,12 +2,12 @@
 
 use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
-use crate::problem::Problem;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
 use crate::service::routes::operations::{Operation, OperationKind};
 use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
+use crate::study::Study;
 use crate::surrogate::Metamodel;
 use axum::Json;
 use axum::extract::{Path, State};
@@ -106,10 +106,10 @@ pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, 
         return Err(ApiError::not_found("metamodel", id));
     }
     let body = state.store.metamodel_body(id).await?.ok_or_else(|| ApiError::not_found("metamodel", id))?;
-    let loaded = tokio::task::spawn_blocking(move || -> crate::error::Result<(Metamodel, Problem)> {
+    let loaded = tokio::task::spawn_blocking(move || -> crate::error::Result<(Metamodel, Study)> {
         let metamodel = Metamodel::from_json(&body)?;
-        let problem = metamodel.problem()?;
-        Ok((metamodel, problem))
+        let study = metamodel.study()?;
+        Ok((metamodel, study))
     })
     .await
     .map_err(ApiError::internal)??;
@@ -154,8 +154,8 @@ async fn exceedance_curve(
             job: serde_json::to_string(&ExceedanceJob { metamodel_id: id, request }).expect("a job serialises"),
         }
     };
-    let work: Work = Box::new(move |metamodel, problem, observer, rendering| {
-        Ok(rendering.render(&request.answer(metamodel, problem, &id, observer)?))
+    let work: Work = Box::new(move |metamodel, study, observer, rendering| {
+        Ok(rendering.render(&request.answer(metamodel, study, &id, observer)?))
     });
     answer_or_queue(&state, &headers, loaded, storms, queued, work).await
 }

@@ -75,7 +75,7 @@ fn set_maximum(spec: &mut utoipa::openapi::OpenApi, schema: &str, property: &str
 }
 
 /// A shared error response: problem details with the given description.
-fn problem(description: &str) -> Response {
+fn study(description: &str) -> Response {
     let content = ContentBuilder::new().schema(Some(Ref::from_schema_name("ProblemDetails"))).build();
     ResponseBuilder::new().description(description).content("application/problem+json", content).build()
 }
@@ -96,7 +96,7 @@ pub fn add_shared_responses(spec: &mut utoipa::openapi::OpenApi) {
         ("InternalError", "The server failed (the database); the error is logged"),
     ];
     for (name, description) in shared {
-        components.responses.insert(name.to_string(), RefOr::T(problem(description)));
+        components.responses.insert(name.to_string(), RefOr::T(study(description)));
     }
     components.schemas.insert("OperationEvent".to_string(), RefOr::T(crate::service::schema::operation_event_schema()));
     describe_event_stream(spec);

@@ -2,12 +2,12 @@
 
 use super::{ApiQuery, Page};
 use crate::analysis::ValidationReport;
+use crate::progress::Progress;
 use crate::service::AppState;
 use crate::service::analyses::AnalysisAnswer;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::ExceedanceAnswer;
 use crate::service::store::JobRow;
-use crate::surrogate::Progress;
 use axum::Json;
 use axum::extract::{Path, State};
 use axum::response::sse::{Event, KeepAlive, Sse};

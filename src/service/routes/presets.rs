@@ -1,8 +1,8 @@
 //! The built-in studies and their default calibration requests, for clients to start from.
 
-use crate::problem::{DEFAULT_PRESET, PRESETS, Problem};
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::{AppState, CalibrationRequest};
+use crate::study::{DEFAULT_PRESET, PRESETS, Study};
 use crate::surrogate::CalibrationOptions;
 use axum::Json;
 use axum::extract::Path;
@@ -36,7 +36,7 @@ pub struct PresetList {
 }
 
 fn describe(name: &str) -> Result<Preset, ApiError> {
-    let problem = Problem::preset(name).map_err(|_| ApiError::not_found("preset", name))?;
+    let study = Study::preset(name).map_err(|_| ApiError::not_found("preset", name))?;
     let defaults = CalibrationOptions::default();
     let description = if name == "frame40" {
         "The paper's 40-storey steel frame, damper coefficients as printed (N·s/m)"
@@ -46,16 +46,16 @@ fn describe(name: &str) -> Result<Preset, ApiError> {
     Ok(Preset {
         name: name.to_string(),
         description: description.to_string(),
-        floors: problem.structure.floors(),
+        floors: study.structure.floors(),
         default: name == DEFAULT_PRESET,
-        roof_height_m: *problem.structure.floor_elevations.last().expect("a structure has floors"),
-        frequencies_rad_s: problem.modes.frequencies.clone(),
+        roof_height_m: *study.structure.floor_elevations.last().expect("a structure has floors"),
+        frequencies_rad_s: study.modes.frequencies.clone(),
         default_calibration: CalibrationRequest {
             preset: Some(name.to_string()),
-            inputs: problem.inputs.inputs.iter().map(|i| (i.name.clone(), i.marginal)).collect(),
-            modes: Some(problem.modes.frequencies.len()),
-            duration_s: Some(problem.storm.duration),
-            time_step_s: Some(problem.storm.time_step),
+            inputs: study.inputs.inputs.iter().map(|i| (i.name.clone(), i.marginal)).collect(),
+            modes: Some(study.modes.frequencies.len()),
+            duration_s: Some(study.storm.duration),
+            time_step_s: Some(study.storm.time_step),
             experiments: Some(defaults.experiments),
             seed: Some(defaults.seed),
             ..CalibrationRequest::default()

@@ -4,12 +4,13 @@
 
 use super::accept_job;
 use super::operations::{Operation, OperationKind};
-use crate::problem::Problem;
+use crate::progress::Observer;
 use crate::service::AppState;
 use crate::service::cache::Loaded;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::{Rendering, RequestWatch, StopOnDrop};
-use crate::surrogate::{Metamodel, Observer};
+use crate::study::Study;
+use crate::surrogate::Metamodel;
 use axum::http::{HeaderMap, header};
 use axum::response::{IntoResponse, Response as HttpResponse};
 use std::sync::Arc;
@@ -37,7 +38,7 @@ pub struct Queued {
 
 /// The rendered answer of a synchronous request, made on a blocking thread.
 pub type Work = Box<
-    dyn FnOnce(&Metamodel, &Problem, &dyn Observer, Rendering) -> crate::error::Result<(&'static str, String)> + Send,
+    dyn FnOnce(&Metamodel, &Study, &dyn Observer, Rendering) -> crate::error::Result<(&'static str, String)> + Send,
 >;
 
 /// Answers with `work` at once when `storms` is within the synchronous limit and the client did
@@ -70,8 +71,8 @@ pub async fn answer_or_queue(
         tokio::task::spawn_blocking(move || {
             // Held until the sampling has stopped, whatever became of the request.
             let _permit = permit;
-            let (metamodel, problem) = loaded.as_ref();
-            work(metamodel, problem, watch.as_ref(), rendering)
+            let (metamodel, study) = loaded.as_ref();
+            work(metamodel, study, watch.as_ref(), rendering)
         })
     };
     let timeout = Duration::from_secs(state.config.sync_timeout_s);

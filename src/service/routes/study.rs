@@ -59,8 +59,8 @@ pub struct StudyInput {
 async fn get_study(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Study>, ApiError> {
     let loaded = load(&state, &id).await?;
     let study = tokio::task::spawn_blocking(move || -> crate::error::Result<Study> {
-        let (metamodel, problem) = &*loaded;
-        let inputs = problem
+        let (metamodel, study) = &*loaded;
+        let inputs = study
             .inputs
             .inputs
             .iter()
@@ -68,20 +68,20 @@ async fn get_study(State(state): State<AppState>, Path(id): Path<String>) -> Res
                 Ok(StudyInput {
                     name: input.name.clone(),
                     marginal: input.marginal,
-                    calibrated_range: metamodel.calibrated_range(problem, &input.name)?,
+                    calibrated_range: metamodel.calibrated_range(study, &input.name)?,
                 })
             })
             .collect::<crate::error::Result<Vec<_>>>()?;
-        let damper_groups = problem.structure.damper_groups();
+        let damper_groups = study.structure.damper_groups();
         Ok(Study {
             metamodel_id: id,
-            preset: problem.name.clone(),
-            floors: problem.structure.floors(),
-            roof_height_m: problem.structure.floor_elevations.last().copied().unwrap_or(0.0),
+            preset: study.name.clone(),
+            floors: study.structure.floors(),
+            roof_height_m: study.structure.floor_elevations.last().copied().unwrap_or(0.0),
             damper_groups,
-            frequencies_rad_s: problem.modes.frequencies.clone(),
-            duration_s: problem.storm.duration,
-            time_step_s: problem.storm.time_step,
+            frequencies_rad_s: study.modes.frequencies.clone(),
+            duration_s: study.storm.duration,
+            time_step_s: study.storm.time_step,
             responses: ResponseKind::ALL
                 .into_iter()
                 .filter(|kind| damper_groups > 0 || kind.of_group(1).is_err())

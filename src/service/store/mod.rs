@@ -76,8 +76,5 @@ impl Store {
     }
 }
 
-#[cfg(any(test, feature = "test-support"))]
-pub mod testing;
-
 #[cfg(test)]
 mod tests;

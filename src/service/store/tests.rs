@@ -2,13 +2,29 @@
 
 use super::*;
 
+/// The test PostgreSQL's fresh schemas, shared with the integration tests.
+#[path = "../../../tests/suite/harness/postgres.rs"]
+mod postgres;
+
+/// A fresh SQLite file, and a fresh PostgreSQL schema where one is reachable.
+async fn stores() -> Vec<(&'static str, Store)> {
+    let dir = std::env::temp_dir().join(format!("windmeta-store-{}", uuid::Uuid::new_v4().simple()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let mut stores =
+        vec![("sqlite", Store::connect(&format!("sqlite://{}", dir.join("t.db").display())).await.unwrap())];
+    if let Some(url) = postgres::fresh_postgres().await {
+        stores.push(("postgres", Store::connect(&url).await.unwrap()));
+    }
+    stores
+}
+
 async fn queue(store: &Store, id: &str) {
     assert_eq!(store.insert_job(id, "calibration", "{}", None, 0, 100).await.unwrap(), Enqueued::New);
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_job_runs_once_and_stores_its_metamodel() {
-    for (name, store) in testing::stores().await {
+    for (name, store) in stores().await {
         queue(&store, "j1").await;
         let job = store.claim("w1", 10_000).await.unwrap().expect("a queued job is claimed");
         assert_eq!((job.id.as_str(), job.state.as_str(), job.attempts), ("j1", "running", 1), "{name}");
@@ -26,7 +42,7 @@ async fn a_job_runs_once_and_stores_its_metamodel() {
 /// Many workers claiming at once from many connections: every job exactly once.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn concurrent_claims_hand_out_each_job_once() {
-    for (name, store) in testing::stores().await {
+    for (name, store) in stores().await {
         for i in 0..20 {
             queue(&store, &format!("j{i:02}")).await;
         }
@@ -53,7 +69,7 @@ async fn concurrent_claims_hand_out_each_job_once() {
 /// A worker that lost its lease cannot complete: the job belongs to the one that took it up.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_lost_lease_discards_the_stale_result() {
-    for (name, store) in testing::stores().await {
+    for (name, store) in stores().await {
         queue(&store, "j").await;
         store.claim("stale", 1).await.unwrap().unwrap();
         tokio::time::sleep(std::time::Duration::from_millis(5)).await;
@@ -70,7 +86,7 @@ async fn a_lost_lease_discards_the_stale_result() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn a_job_whose_worker_keeps_dying_fails_with_the_reason() {
-    for (name, store) in testing::stores().await {
+    for (name, store) in stores().await {
         queue(&store, "j").await;
         for attempt in 1..=MAX_ATTEMPTS {
             let job = store.claim("w", 1).await.unwrap().expect("taken up again");
@@ -86,7 +102,7 @@ async fn a_job_whose_worker_keeps_dying_fails_with_the_reason() {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn cancel_release_idempotency_and_a_full_queue() {
-    for (name, store) in testing::stores().await {
+    for (name, store) in stores().await {
         queue(&store, "queued").await;
         let cancelled = store.request_cancel("queued").await.unwrap().unwrap();
         assert_eq!(cancelled.state, "cancelled", "{name}");
@@ -121,7 +137,7 @@ use tasks::TaskTally;
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn tasks_of_a_running_job_are_shared_and_tallied() {
-    for (name, store) in testing::stores().await {
+    for (name, store) in stores().await {
         queue(&store, "j").await;
         let requests = ["a".to_string(), "b".to_string()];
         store.insert_tasks("j", &requests).await.unwrap();

@@ -4,11 +4,12 @@
 //! outputs (a [`StepSink`]) and accumulates the divergence test, with the state in registers.
 //! Written once over [`Vector`] and compiled per instruction set (`dispatch`).
 
+use super::ModeProgram;
 use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
-use super::simd::Vector;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
-use super::{LANES, Lanes, ModeProgram};
+use crate::simd::Vector;
+use crate::simd::{LANES, Lanes};
 use crate::surrogate::narx::DIVERGENCE_BOUND;
 use crate::wind::CubicSchedule;
 

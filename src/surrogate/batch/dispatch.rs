@@ -1,14 +1,12 @@
-//! Instruction-set dispatch: the free run compiled for AVX-512, for AVX2 and portably, and the
-//! choice among them by what the running processor has.
+//! The free run as a kernel of the vector type, run on the widest vectors the processor has.
 
+use super::BatchSample;
 use super::dense::{self, DenseLinear};
 use super::general::{self, TermLists};
-use super::inputs::{Prepared, Workspace, lane_inputs};
-use super::simd::Vector;
-#[cfg(target_arch = "x86_64")]
-use super::simd::{Avx2, Avx2Isa, Avx512, Avx512Isa};
+use super::inputs::{BatchWorkspace, Prepared, lane_inputs};
 use super::sink::{Divergence, Sink};
-use super::{BatchSample, Lanes};
+use crate::simd::Lanes;
+use crate::simd::{Kernel, Vector, run_widest};
 
 /// A batch's models compiled for the free run, and the storm they run over.
 pub(super) struct Compiled {
@@ -34,45 +32,27 @@ pub(super) enum Recursion {
 pub(super) fn free_run(
     compiled: &Compiled,
     samples: &[BatchSample],
-    workspace: &mut Workspace,
+    workspace: &mut BatchWorkspace,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
-    #[cfg(target_arch = "x86_64")]
-    {
-        if let Some(isa) = Avx512Isa::detect() {
-            // SAFETY: `isa` was detected, so the processor has the features the function is
-            // compiled for.
-            return unsafe { free_run_avx512(isa, compiled, samples, workspace, sink) };
-        }
-        if let Some(isa) = Avx2Isa::detect() {
-            // SAFETY: as above.
-            return unsafe { free_run_avx2(isa, compiled, samples, workspace, sink) };
-        }
+    run_widest(FreeRun { compiled, samples, workspace, sink })
+}
+
+/// The free run as a kernel of the vector type, so that it is compiled for each.
+struct FreeRun<'a, 's, 'k> {
+    compiled: &'a Compiled,
+    samples: &'a [BatchSample<'s>],
+    workspace: &'a mut BatchWorkspace,
+    sink: &'a mut Sink<'k>,
+}
+
+impl Kernel for FreeRun<'_, '_, '_> {
+    type Output = Result<(), Divergence>;
+    #[inline(always)]
+    fn run<V: Vector>(self, isa: V::Isa) -> Self::Output {
+        free_run_on::<V>(isa, self.compiled, self.samples, self.workspace, self.sink)
     }
-    free_run_on::<Lanes>((), compiled, samples, workspace, sink)
 }
-
-/// [`free_run_on`] compiled for the features of a vector type, so that its intrinsics inline.
-macro_rules! compiled_for {
-    ($name:ident, $vector:ident, $features:literal) => {
-        /// # Safety
-        /// The processor must have the features the function is compiled for, which `isa` proves.
-        #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = $features)]
-        unsafe fn $name(
-            isa: <$vector as Vector>::Isa,
-            compiled: &Compiled,
-            samples: &[BatchSample],
-            workspace: &mut Workspace,
-            sink: &mut Sink,
-        ) -> Result<(), Divergence> {
-            free_run_on::<$vector>(isa, compiled, samples, workspace, sink)
-        }
-    };
-}
-
-compiled_for!(free_run_avx512, Avx512, "avx512f,fma");
-compiled_for!(free_run_avx2, Avx2, "avx2,fma");
 
 /// The inputs into the workspace, then the recursion, on the vectors V. Everything here inlines
 /// into its caller, so that it is compiled for the caller's features; nothing may go through a
@@ -83,7 +63,7 @@ fn free_run_on<V: Vector>(
     isa: V::Isa,
     compiled: &Compiled,
     samples: &[BatchSample],
-    workspace: &mut Workspace,
+    workspace: &mut BatchWorkspace,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
     let (steps, time_step) = (compiled.steps, compiled.time_step);

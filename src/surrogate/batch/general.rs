@@ -3,10 +3,11 @@
 //! recursion (`dense`) covers the paper's structures faster; this path covers the rest (powers,
 //! products of inputs and outputs, long lags).
 
+use super::ModeProgram;
 use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
-use super::{LANES, Lanes, ModeProgram};
+use crate::simd::{LANES, Lanes};
 
 /// A term with its sources resolved and its coefficient in every lane.
 #[derive(Debug, Clone, Copy)]

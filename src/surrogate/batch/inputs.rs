@@ -1,16 +1,17 @@
 //! The batch's inputs: every lane's scaled force deviations on one grid, lane-major, so that one
-//! cubic interpolation serves all lanes, held in a [`Workspace`] the caller keeps from batch to
+//! cubic interpolation serves all lanes, held in a [`BatchWorkspace`] the caller keeps from batch to
 //! batch.
 
-use super::simd::Vector;
-use super::{BatchSample, LANES, Lanes};
+use super::BatchSample;
+use crate::simd::Vector;
+use crate::simd::{LANES, Lanes};
 use crate::wind::{CoarseSeries, CubicSchedule};
 
 /// The buffers a batch fills, kept by the caller and reused from batch to batch (one per worker
 /// thread, e.g. through rayon's `map_init`): a batch's inputs are megabytes, and allocating them
 /// afresh cost page faults.
 #[derive(Default)]
-pub struct Workspace {
+pub struct BatchWorkspace {
     /// inputs[m][q][lane]: mode m's scaled input deviation at coarse point q, every lane.
     pub(super) inputs: Vec<Vec<Lanes>>,
 }
@@ -22,7 +23,7 @@ pub(super) struct Prepared<'a> {
     pub rests: &'a [Lanes],
     /// The schedule from the storm's steps onto the points of `coarse`.
     pub schedule: CubicSchedule,
-    /// coarse[m][q][lane], as in [`Workspace`].
+    /// coarse[m][q][lane], as in [`BatchWorkspace`].
     pub coarse: &'a [Vec<Lanes>],
     pub steps: usize,
 }
@@ -37,7 +38,7 @@ pub(super) fn lane_inputs(
     inverse_scales: &[f64],
     steps: usize,
     time_step: f64,
-    workspace: &mut Workspace,
+    workspace: &mut BatchWorkspace,
 ) -> CubicSchedule {
     let inputs = &mut workspace.inputs;
     let transpose = |series: &[&[f64]], scale: f64, to: &mut Vec<Lanes>| {

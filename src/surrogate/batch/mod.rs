@@ -8,7 +8,7 @@
 //! terms.
 //!
 //! - `samples`: what a batch is given (each mode's terms, each sample's coefficients and forces);
-//! - `inputs`: the lane-major inputs, in a [`Workspace`] the caller keeps between batches;
+//! - `inputs`: the lane-major inputs, in a [`BatchWorkspace`] the caller keeps between batches;
 //! - `dense`: the paper's structures (constant, lagged inputs and outputs to the first power) as
 //!   dense arrays with modes and lags fixed at compile time, one fused loop per step;
 //! - `general`: any other structure, from term lists, a block of steps at a time;
@@ -25,18 +25,15 @@ mod dispatch;
 mod general;
 mod inputs;
 mod samples;
-mod simd;
 mod sink;
 
-pub use super::lanes::{LANES, Lanes};
-pub use inputs::Workspace;
+pub use inputs::BatchWorkspace;
 pub use samples::{BatchSample, ModeProgram};
-#[cfg(target_arch = "x86_64")]
-pub(crate) use simd::Avx512Isa;
-pub use sink::{Divergence, Sink};
+pub use sink::{BatchInput, Divergence, ModalScales, MotionSink, Reduction, Sink, SinkFactory};
 
 use super::narx::{NarxTerm, rest_output};
 use crate::error::{Error, Result};
+use crate::simd::{LANES, Lanes};
 use dense::DenseLinear;
 use dispatch::{Compiled, Recursion, free_run};
 use general::TermLists;
@@ -49,7 +46,7 @@ pub fn run(
     samples: &[BatchSample],
     steps: usize,
     time_step: f64,
-    workspace: &mut Workspace,
+    workspace: &mut BatchWorkspace,
     sink: &mut Sink,
 ) -> std::result::Result<(), BatchError> {
     assert!(samples.len() <= LANES, "at most {LANES} samples per batch");
@@ -137,7 +134,7 @@ mod tests {
                 }
             }
         };
-        run(&programs, &samples, steps, 0.01, &mut Workspace::default(), &mut Sink::Blocks(&mut consume)).unwrap();
+        run(&programs, &samples, steps, 0.01, &mut BatchWorkspace::default(), &mut Sink::Blocks(&mut consume)).unwrap();
         assert!(read.iter().all(|lane| lane == &inputs), "the blocks' inputs are the forces on the storm's grid");
         for (k, history) in got.iter().enumerate() {
             let (ta, tb) = (&samples[k].theta[0], &samples[k].theta[1]);
@@ -188,7 +185,8 @@ mod tests {
                     }
                 }
             };
-            run(&programs, &samples, steps, 0.01, &mut Workspace::default(), &mut Sink::Blocks(&mut consume)).unwrap();
+            run(&programs, &samples, steps, 0.01, &mut BatchWorkspace::default(), &mut Sink::Blocks(&mut consume))
+                .unwrap();
             got
         };
         let dense = run_with(&linear, &linear_b, 0);
@@ -211,8 +209,9 @@ mod tests {
             BatchSample { theta: vec![vec![0.02, 1.9, -0.95]], forces: &forces },
             BatchSample { theta: vec![vec![0.02, 2.1, -0.9]], forces: &forces },
         ];
-        let err = run(&programs, &samples, 5000, 0.01, &mut Workspace::default(), &mut Sink::Blocks(&mut |_, _, _| {}))
-            .unwrap_err();
+        let err =
+            run(&programs, &samples, 5000, 0.01, &mut BatchWorkspace::default(), &mut Sink::Blocks(&mut |_, _, _| {}))
+                .unwrap_err();
         match err {
             BatchError::Diverged(d) => assert_eq!((d.lane, d.mode), (1, 0)),
             other => panic!("{other:?}"),

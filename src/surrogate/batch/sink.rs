@@ -1,7 +1,14 @@
-//! What a batch produces (its [`Sink`]) and how a diverging lane is named.
+//! Where a batch's outputs go. The free run hands its blocks of scaled outputs to a [`Sink`]:
+//! every block to a consumer, or the peaks of a fixed combination formed inside its vector code. A
+//! peak request says which by its [`Reduction`]: a [`Combination`](Reduction::Combination) of the
+//! modal displacements, or the [`Motion`](Reduction::Motion), whose blocks go to a [`MotionSink`]
+//! that a [`SinkFactory`] builds for each batch (the accelerations and damper forces of
+//! `analysis::motion_peaks`). Also here: how a diverging lane is named.
 
-use super::Lanes;
+use crate::error::Result;
+use crate::simd::Lanes;
 use crate::surrogate::narx::{DIVERGENCE_BOUND, diverged};
+use crate::wind::ForceSource;
 
 /// Steps per block: the granularity of the divergence test and of [`Sink::Blocks`].
 pub(super) const BLOCK: usize = 512;
@@ -19,6 +26,40 @@ pub enum Sink<'a> {
     /// with y_m = level_m + scale_m ŷ_m: gain_m = w_m scale_m, offset = Σ_m w_m level_m), formed
     /// inside the batch's own vectorised code.
     Peaks { gains: &'a [f64], offsets: Lanes, peaks: &'a mut Lanes },
+}
+
+/// One sample of a batch: its number in the request, its physical inputs, its forces.
+pub type BatchInput<'a> = (usize, &'a [f64], &'a dyn ForceSource);
+
+/// How a batch's runs become one peak per lane.
+pub enum Reduction<'a> {
+    /// Peak |Σ_m w_m y_m(t)| of a fixed combination of the modal displacements (displacement,
+    /// drift, stroke), formed inside the free run's vectorised code.
+    Combination(&'a [f64]),
+    /// Responses of the motion and the loads (any, accelerations and damper forces included), by
+    /// a sink built for the batch: lane i's physical inputs at i, and the scales of its blocks.
+    Motion(&'a SinkFactory<'a>),
+}
+
+/// Builds a batch's [`MotionSink`] from its lanes' physical inputs and its blocks' scales.
+pub type SinkFactory<'a> = dyn Fn(&[&[f64]], &ModalScales) -> Result<Box<dyn MotionSink>> + Sync + 'a;
+
+/// The scales of the free run's blocks, per mode: the output ŷ_m is (y_m − levels[m])/outputs[m]
+/// and the input q̂_m is (Q_m − Q̄_m)/inputs[m], `levels[m]` the static level of every lane.
+#[derive(Debug, Clone)]
+pub struct ModalScales {
+    pub outputs: Vec<f64>,
+    pub inputs: Vec<f64>,
+    pub levels: Vec<Lanes>,
+}
+
+/// What a batch's modal motion is reduced to, block by block: one peak per lane.
+pub trait MotionSink {
+    /// Steps `first..` of a block, every lane: `outputs[i·M + m]` the scaled output ŷ_m at step
+    /// first + i and `inputs[i·M + m]` the scaled input q̂_m it read (see [`ModalScales`]).
+    fn take(&mut self, first: usize, outputs: &[Lanes], inputs: &[Lanes]);
+    /// Per response, every lane's peak, once the storm is over.
+    fn finish(&mut self) -> Vec<Lanes>;
 }
 
 /// Where a lane's run left the range a sane model can produce.

@@ -44,12 +44,12 @@ impl Visitor<'_> for WholeVisitor {
     }
 }
 
-/// `#[serde(deserialize_with = "crate::whole::count")]`
+/// `#[serde(deserialize_with = "crate::count::count")]`
 pub fn count<'de, D: Deserializer<'de>, T: TryFrom<u64>>(deserializer: D) -> Result<T, D::Error> {
     Whole::<T>::deserialize(deserializer).map(|w| w.0)
 }
 
-/// `#[serde(deserialize_with = "crate::whole::optional_count")]`: a count or `null`.
+/// `#[serde(deserialize_with = "crate::count::optional_count")]`: a count or `null`.
 pub fn optional_count<'de, D: Deserializer<'de>, T: TryFrom<u64>>(deserializer: D) -> Result<Option<T>, D::Error> {
     Option::<Whole<T>>::deserialize(deserializer).map(|w| w.map(|w| w.0))
 }
@@ -57,7 +57,7 @@ pub fn optional_count<'de, D: Deserializer<'de>, T: TryFrom<u64>>(deserializer: 
 /// Largest seed: 2⁶³ − 1, the largest `int64`, which is what the API description can state.
 const MAX_SEED: u64 = i64::MAX as u64;
 
-/// `#[serde(deserialize_with = "crate::whole::seed")]`: a count of at most 2⁶³ − 1.
+/// `#[serde(deserialize_with = "crate::count::seed")]`: a count of at most 2⁶³ − 1.
 pub fn seed<'de, D: Deserializer<'de>>(deserializer: D) -> Result<u64, D::Error> {
     let value: u64 = count(deserializer)?;
     if value > MAX_SEED {
@@ -66,7 +66,7 @@ pub fn seed<'de, D: Deserializer<'de>>(deserializer: D) -> Result<u64, D::Error>
     Ok(value)
 }
 
-/// `#[serde(deserialize_with = "crate::whole::optional_seed")]`: a seed or `null`.
+/// `#[serde(deserialize_with = "crate::count::optional_seed")]`: a seed or `null`.
 pub fn optional_seed<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Option<u64>, D::Error> {
     match optional_count::<D, u64>(deserializer)? {
         Some(value) if value > MAX_SEED => Err(D::Error::custom(format!("a seed is at most {MAX_SEED}, got {value}"))),

@@ -11,7 +11,7 @@ use std::collections::BTreeMap;
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(default, deny_unknown_fields)]
-pub struct ProblemSpec {
+pub struct StudySpec {
     /// A preset name; ignored for the structure when `structure` is given.
     pub preset: Option<String>,
     /// A custom structure instead of the preset's.

@@ -13,8 +13,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use windmeta::analysis::{Response, metamodel_peaks};
 use windmeta::error::Error;
-use windmeta::problem::Problem;
-use windmeta::surrogate::{CalibrationOptions, Metamodel, Observer, Progress, Silent, calibrate};
+use windmeta::progress::{Observer, Progress};
+use windmeta::study::Study;
+use windmeta::surrogate::{CalibrationOptions, calibrate};
 
 const LATENCY_BOUND: Duration = Duration::from_secs(2);
 
@@ -51,8 +52,8 @@ impl Observer for StopAt {
     }
 }
 
-fn problem() -> Problem {
-    Problem::preset("frame40-kn").unwrap()
+fn study() -> Study {
+    Study::preset("frame40-kn").unwrap()
 }
 
 /// Four experiments beyond the twenty of the structure selection, so that every stage is reached.
@@ -62,7 +63,7 @@ fn options() -> CalibrationOptions {
 
 #[test]
 fn a_stop_reaches_every_stage_within_about_a_second() {
-    let problem = problem();
+    let study = study();
     let options = options();
     let selection = options.selection_experiments;
     let stages: [(&str, Trigger); 4] = [
@@ -78,20 +79,19 @@ fn a_stop_reaches_every_stage_within_about_a_second() {
     assert_eq!(selection, 20, "the third trigger counts on 20 selection experiments");
     for (stage, trigger) in stages {
         let observer = StopAt::new(trigger);
-        let outcome = calibrate(&problem, &options, &observer);
+        let outcome = calibrate(&study, &options, &observer);
         let latency = observer.latency();
         eprintln!("{stage}: stopped {:.0} ms after the request", latency.as_secs_f64() * 1e3);
         assert!(matches!(outcome, Err(Error::Cancelled)), "{stage}: {:?}", outcome.map(|_| "finished"));
         assert!(latency < LATENCY_BOUND, "{stage}: {latency:?}");
     }
 
-    // A metamodel calibrated on two-minute storms (the NARX models do not depend on the storm's
-    // length) samples full-size storms.
-    let short = problem.clone().with_storm(120.0, problem.storm.time_step).unwrap();
-    let metamodel: Metamodel = calibrate(&short, &options, &Silent).unwrap();
+    // The shared fixture, calibrated on two-minute storms (the NARX models do not depend on the
+    // storm's length), samples full-size storms.
+    let metamodel = &crate::harness::fixture::metamodel().0;
     let observer = StopAt::new(|p| matches!(p, Progress::Samples { .. }));
-    let roof = Response::Displacement { floor: problem.structure.floors() };
-    let outcome = metamodel_peaks(&metamodel, &problem, &problem.inputs, 100_000, 1, roof, &observer);
+    let roof = Response::Displacement { floor: study.structure.floors() };
+    let outcome = metamodel_peaks(metamodel, &study, &study.inputs, 100_000, 1, roof, &observer);
     let latency = observer.latency();
     eprintln!("sampling: stopped {:.0} ms after the request", latency.as_secs_f64() * 1e3);
     assert!(matches!(outcome, Err(Error::Cancelled)));

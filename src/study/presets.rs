@@ -1,6 +1,6 @@
 //! The built-in studies: the paper's 40-storey frame with its dampers, under two unit readings.
 
-use super::ProblemSpec;
+use super::StudySpec;
 use crate::error::{Error, Result};
 use crate::structure::{Structure, frame40};
 
@@ -12,7 +12,7 @@ pub const DEFAULT_PRESET: &str = "frame40-kn";
 
 /// The study's name, its structure and the scale of its damper coefficients' default range
 /// (1 for N·s/m as printed, 1000 for kN·s/m), from the spec's preset and custom structure.
-pub(super) fn resolve(spec: &ProblemSpec) -> Result<(String, Structure, f64)> {
+pub(super) fn resolve(spec: &StudySpec) -> Result<(String, Structure, f64)> {
     let (name, damper_scale) = match spec.preset.as_deref() {
         Some("frame40") => ("frame40", 1.0),
         Some("frame40-kn") => ("frame40-kn", 1000.0),

@@ -1,4 +1,4 @@
-//! PC-NARX end to end at small size (120 s storms, 32 experiments): calibration, validation against
+//! PC-NARX end to end at small size (the shared fixture: 120 s storms, 32 experiments): calibration, validation against
 //! the reference on fresh samples, exact reproduction from the serialised metamodel, divergence
 //! reporting, exceedance curves, and the `calibrate`/`validate`/`exceedance` commands.
 //!
@@ -7,30 +7,21 @@
 //! order of magnitude looser (the full-size targets: 0.02, 0.99, 2 %), so they hold for any
 //! correct implementation and fail for a broken one.
 
+use crate::harness::fixture;
 use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
-use std::sync::OnceLock;
 use windmeta::analysis::{Response, ResponseKind, ResponseView, exceedance_curve, metamodel_peaks, validate};
 use windmeta::dynamics::{ModalMotion, SampleModel};
-use windmeta::problem::{Problem, WindPath};
-use windmeta::surrogate::{CalibrationOptions, Metamodel, Parametrization, Silent, WindCoverage, calibrate};
+use windmeta::progress::Silent;
+use windmeta::study::{Study, WindPath};
+use windmeta::surrogate::{CalibrationOptions, Metamodel, Parametrization, WindCoverage, calibrate};
 use windmeta::uncertainty::rng_from_seed;
-use windmeta::wind::Workspace;
-
-fn calibrated() -> &'static (Metamodel, Problem) {
-    static MODEL: OnceLock<(Metamodel, Problem)> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let problem = Problem::preset("frame40-kn").unwrap().with_storm(120.0, 0.01).unwrap();
-        let options = CalibrationOptions { experiments: 32, seed: 1, ..Default::default() };
-        let metamodel = calibrate(&problem, &options, &Silent).unwrap();
-        (metamodel, problem)
-    })
-}
+use windmeta::wind::TransformWorkspace;
 
 #[test]
 fn calibration_fits_its_experiments() {
-    let (metamodel, _) = calibrated();
+    let (metamodel, _) = fixture::metamodel();
     assert_eq!(metamodel.models.len(), 3);
     for d in &metamodel.calibration.modes {
         assert!(
@@ -46,8 +37,8 @@ fn calibration_fits_its_experiments() {
 
 #[test]
 fn validation_on_fresh_samples_meets_the_targets() {
-    let (metamodel, problem) = calibrated();
-    let report = validate(metamodel, problem, &problem.inputs, 16, 5, &Silent).unwrap();
+    let (metamodel, study) = fixture::metamodel();
+    let report = validate(metamodel, study, &study.inputs, 16, 5, &Silent).unwrap();
     assert!(report.mean_relative_error < 0.02, "roof mean relative error {}", report.mean_relative_error);
     assert!(report.peak_correlation > 0.99, "peak correlation {}", report.peak_correlation);
     assert!(report.median_peak_relative_error < 0.02, "median peak error {}", report.median_peak_relative_error);
@@ -63,24 +54,27 @@ fn validation_on_fresh_samples_meets_the_targets() {
 
 #[test]
 fn serialised_metamodel_reproduces_predictions_exactly() {
-    let (metamodel, problem) = calibrated();
+    let (metamodel, study) = fixture::metamodel();
     let json = serde_json::to_string(metamodel).unwrap();
     let back = Metamodel::from_json(&json).unwrap();
     assert!(serde_json::to_string(&back).unwrap() == json, "the JSON does not round-trip");
-    let rebuilt = back.problem().unwrap();
-    let x = problem.inputs.means();
-    let p = problem.parameters(&x).unwrap();
-    let forces = problem.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(77)).unwrap();
-    assert!(metamodel.predict(problem, &x, &forces).unwrap() == back.predict(&rebuilt, &x, &forces).unwrap());
+    let rebuilt = back.study().unwrap();
+    let x = study.inputs.means();
+    let p = study.parameters(&x).unwrap();
+    let forces = study.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(77)).unwrap();
+    assert!(metamodel.predict(study, &x, &forces).unwrap() == back.predict(&rebuilt, &x, &forces).unwrap());
     assert!(Metamodel::from_json(r#"{"format": "something-else", "version": 1}"#).is_err());
-    let future = json.replacen("\"version\":1", "\"version\":99", 1);
+    let future = json.replacen("\"version\":2", "\"version\":99", 1);
     assert!(Metamodel::from_json(&future).unwrap_err().to_string().contains("version"));
+    // A file of the first version, which named the study `problem`, reads as the same metamodel.
+    let first = json.replacen("\"version\":2", "\"version\":1", 1).replacen("\"study\":", "\"problem\":", 1);
+    assert!(first != json && serde_json::to_string(&Metamodel::from_json(&first).unwrap()).unwrap() == json);
 }
 
 /// A model whose autoregressive part is unstable is reported as diverged, never returned.
 #[test]
 fn diverging_free_runs_are_reported() {
-    let (metamodel, problem) = calibrated();
+    let (metamodel, study) = fixture::metamodel();
     let mut broken = metamodel.clone();
     let model = &mut broken.models[0];
     model.parametrization = Parametrization::Direct;
@@ -96,10 +90,10 @@ fn diverging_free_runs_are_reported() {
             0.0
         }];
     }
-    let x = problem.inputs.means();
-    let p = problem.parameters(&x).unwrap();
-    let forces = problem.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(1)).unwrap();
-    let err = match broken.predict(problem, &x, &forces) {
+    let x = study.inputs.means();
+    let p = study.parameters(&x).unwrap();
+    let forces = study.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(1)).unwrap();
+    let err = match broken.predict(study, &x, &forces) {
         Ok(_) => panic!("an unstable model returned a result"),
         Err(e) => e.to_string(),
     };
@@ -110,11 +104,11 @@ fn diverging_free_runs_are_reported() {
 /// above the one for a light wind.
 #[test]
 fn exceedance_curves_respond_to_the_wind() {
-    let (metamodel, problem) = calibrated();
+    let (metamodel, study) = fixture::metamodel();
     let roof = Response::Displacement { floor: 40 };
     let at = |v: f64| {
-        let inputs = problem.inputs.clone().with_fixed("wind_speed", v).unwrap();
-        metamodel_peaks(metamodel, problem, &inputs, 60, 3, roof, &Silent).unwrap()
+        let inputs = study.inputs.clone().with_fixed("wind_speed", v).unwrap();
+        metamodel_peaks(metamodel, study, &inputs, 60, 3, roof, &Silent).unwrap()
     };
     let (light, strong) = (at(25.0), at(35.0));
     let thresholds: Vec<f64> = (0..30).map(|i| 0.1 + 0.02 * i as f64).collect();
@@ -123,12 +117,9 @@ fn exceedance_curves_respond_to_the_wind() {
     assert!(a.probabilities.windows(2).all(|w| w[0] >= w[1]));
     assert!(a.probabilities.iter().zip(&b.probabilities).all(|(p, q)| p <= q));
     assert!(a.probabilities.iter().zip(&b.probabilities).any(|(p, q)| p < q));
-    let drift =
-        metamodel_peaks(metamodel, problem, &problem.inputs, 8, 3, Response::Drift { floor: 20 }, &Silent).unwrap();
+    let drift = metamodel_peaks(metamodel, study, &study.inputs, 8, 3, Response::Drift { floor: 20 }, &Silent).unwrap();
     assert!(drift.iter().all(|d| *d > 0.0 && *d < 0.1));
-    assert!(
-        metamodel_peaks(metamodel, problem, &problem.inputs, 8, 3, Response::Drift { floor: 41 }, &Silent).is_err()
-    );
+    assert!(metamodel_peaks(metamodel, study, &study.inputs, 8, 3, Response::Drift { floor: 41 }, &Silent).is_err());
 }
 
 fn windmeta(args: &[&str]) -> std::process::Output {
@@ -144,11 +135,25 @@ fn workdir() -> PathBuf {
 #[test]
 fn commands_calibrate_validate_and_sample_exceedance() {
     let dir = workdir();
-    let model = dir.join("model.json");
-    let model = model.to_str().unwrap();
-    let out =
-        windmeta(&["calibrate", "--preset", "frame40-kn", "--experiments", "16", "--duration", "120", "--out", model]);
+    let calibrated = dir.join("calibrated.json");
+    let out = windmeta(&[
+        "calibrate",
+        "--preset",
+        "frame40-kn",
+        "--experiments",
+        "6",
+        "--duration",
+        "20",
+        "--out",
+        calibrated.to_str().unwrap(),
+    ]);
     assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let written = Metamodel::from_json(&std::fs::read_to_string(&calibrated).unwrap()).unwrap();
+    assert_eq!((written.models.len(), written.calibration.options.experiments), (3, 6));
+    // The other commands read the shared fixture from a file.
+    let model = dir.join("model.json");
+    std::fs::write(&model, serde_json::to_string(&fixture::metamodel().0).unwrap()).unwrap();
+    let model = model.to_str().unwrap();
     let out = windmeta(&[
         "validate",
         "--model",
@@ -216,8 +221,8 @@ fn commands_calibrate_validate_and_sample_exceedance() {
 /// in another order) against [`ResponseView`], which evaluates every damper at every step.
 #[test]
 fn batched_peaks_equal_the_peaks_of_the_histories() {
-    let (metamodel, problem) = calibrated();
-    let floors = problem.structure.floors();
+    let (metamodel, study) = fixture::metamodel();
+    let floors = study.structure.floors();
     let responses = [
         (Response::Displacement { floor: floors }, 1e-12),
         (Response::Drift { floor: 20 }, 1e-12),
@@ -226,17 +231,17 @@ fn batched_peaks_equal_the_peaks_of_the_histories() {
         (Response::DamperForce { floor: 12 }, 1e-9),
     ];
     for (response, tolerance) in responses {
-        let peaks = metamodel_peaks(metamodel, problem, &problem.inputs, 11, 3, response, &Silent).unwrap();
-        let xs = windmeta::uncertainty::monte_carlo(&problem.inputs, 11, &mut rng_from_seed(3));
+        let peaks = metamodel_peaks(metamodel, study, &study.inputs, 11, 3, response, &Silent).unwrap();
+        let xs = windmeta::uncertainty::monte_carlo(&study.inputs, 11, &mut rng_from_seed(3));
         for (k, (x, peak)) in xs.iter().zip(&peaks).enumerate() {
-            let (_, coarse) = problem.sample_storm(x, WindPath::Modal, 3, k, &mut Workspace::default()).unwrap();
-            let forces = coarse.on_grid(&problem.storm);
-            let histories = metamodel.predict(problem, x, &forces).unwrap();
-            let p = problem.parameters(x).unwrap();
-            let (modes, dampers) = (problem.sample_modes(&p), problem.dampers(&p).unwrap());
+            let (_, coarse) = study.sample_storm(x, WindPath::Modal, 3, k, &mut TransformWorkspace::default()).unwrap();
+            let forces = coarse.on_grid(&study.storm);
+            let histories = metamodel.predict(study, x, &forces).unwrap();
+            let p = study.parameters(x).unwrap();
+            let (modes, dampers) = (study.sample_modes(&p), study.dampers(&p).unwrap());
             let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
-            let motion = ModalMotion::from_displacements(histories, problem.storm.time_step);
-            let view = ResponseView::new(&metamodel.modes.shapes, &problem.structure, &motion, &model, &forces);
+            let motion = ModalMotion::from_displacements(histories, study.storm.time_step);
+            let view = ResponseView::new(&metamodel.modes.shapes, &study.structure, &motion, &model, &forces);
             let expected = response.peak(&view).unwrap();
             assert!(expected > 0.0);
             assert!(
@@ -253,19 +258,19 @@ fn batched_peaks_equal_the_peaks_of_the_histories() {
 /// end, the metamodel meets the same loose targets as on the input model.
 #[test]
 fn a_covering_calibration_is_calibrated_and_valid_at_its_upper_end() {
-    let problem = Problem::preset("frame40-kn").unwrap().with_storm(120.0, 0.01).unwrap();
+    let study = Study::preset("frame40-kn").unwrap().with_storm(120.0, 0.01).unwrap();
     let options = CalibrationOptions {
         experiments: 32,
         seed: 1,
         cover_wind_speeds: Some(WindCoverage { lower: 30.0, upper: 60.0 }),
         ..Default::default()
     };
-    let metamodel = calibrate(&problem, &options, &Silent).unwrap();
-    let [low, high] = metamodel.calibrated_range(&problem, "wind_speed").unwrap();
-    let [_, plain_high] = calibrated().0.calibrated_range(&problem, "wind_speed").unwrap();
+    let metamodel = calibrate(&study, &options, &Silent).unwrap();
+    let [low, high] = metamodel.calibrated_range(&study, "wind_speed").unwrap();
+    let [_, plain_high] = fixture::metamodel().0.calibrated_range(&study, "wind_speed").unwrap();
     assert!(high > 58.0 && plain_high < 45.0 && low < 30.0, "covered [{low}, {high}], plain up to {plain_high}");
-    let at_end = problem.inputs.clone().with_fixed("wind_speed", 60.0).unwrap();
-    let report = validate(&metamodel, &problem, &at_end, 12, 5, &Silent).unwrap();
+    let at_end = study.inputs.clone().with_fixed("wind_speed", 60.0).unwrap();
+    let report = validate(&metamodel, &study, &at_end, 12, 5, &Silent).unwrap();
     assert_eq!(report.fixed.get("wind_speed"), Some(&60.0));
     assert!(report.peak_correlation > 0.95, "peak correlation {}", report.peak_correlation);
     assert!(report.median_peak_relative_error < 0.02, "median peak error {}", report.median_peak_relative_error);
@@ -278,12 +283,12 @@ fn a_covering_calibration_is_calibrated_and_valid_at_its_upper_end() {
 /// naming the floor or the group.
 #[test]
 fn every_response_is_sampled() {
-    let (metamodel, problem) = calibrated();
+    let (metamodel, study) = fixture::metamodel();
     let peaks = |response: Response, v: f64| {
-        let inputs = problem.inputs.clone().with_fixed("wind_speed", v).unwrap();
-        metamodel_peaks(metamodel, problem, &inputs, 6, 3, response, &Silent).unwrap()
+        let inputs = study.inputs.clone().with_fixed("wind_speed", v).unwrap();
+        metamodel_peaks(metamodel, study, &inputs, 6, 3, response, &Silent).unwrap()
     };
-    let cos = problem.structure.dampers[31].cos_angle;
+    let cos = study.structure.dampers[31].cos_angle;
     let (drift, stroke) =
         (peaks(Response::Drift { floor: 32 }, 30.0), peaks(Response::DamperStroke { floor: 32 }, 30.0));
     for (d, s) in drift.iter().zip(&stroke) {
@@ -305,13 +310,13 @@ fn every_response_is_sampled() {
             assert!((e - largest).abs() <= 1e-12 * largest, "{kind:?} of group 2, storm {k}: {e} vs {largest}");
         }
     }
-    let mut bare = problem.clone();
+    let mut bare = study.clone();
     bare.structure.dampers.clear();
     let error = Response::DamperForce { floor: 3 }.check(&bare.structure).unwrap_err().to_string();
     assert!(error.contains("floor") && error.contains("no damper"), "{error}");
     let error = Response::GroupDamperForce { group: 1 }.check(&bare.structure).unwrap_err().to_string();
     assert!(error.starts_with("group") && error.contains("no dampers"), "{error}");
-    let error = Response::GroupDamperForce { group: 5 }.check(&problem.structure).unwrap_err().to_string();
+    let error = Response::GroupDamperForce { group: 5 }.check(&study.structure).unwrap_err().to_string();
     assert!(error.starts_with("group") && error.contains("between 1 and 4"), "{error}");
-    assert!(Response::Acceleration { floor: 41 }.check(&problem.structure).is_err());
+    assert!(Response::Acceleration { floor: 41 }.check(&study.structure).is_err());
 }

@@ -17,6 +17,7 @@ pub struct TestApp {
     server: tokio::task::JoinHandle<std::io::Result<()>>,
 }
 
+/// A fresh SQLite file for one test (`name` tells the tests of one run apart).
 pub fn database(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("windmeta-api-{}-{name}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
@@ -54,6 +55,7 @@ pub async fn spawn_app_configured(db: &std::path::Path, adjust: impl FnOnce(&mut
         ..ServeArgs::default()
     };
     adjust(&mut args);
+    super::logs::capture();
     let config = args.clone();
     let app = Application::build(args).await.expect("the app builds");
     let address = format!("http://{}", app.local_addr());
@@ -133,7 +135,7 @@ pub fn assert_problem(response_status: u16, content_type: &str, body: &Value, st
     assert!(body.to_string().contains(mentions), "expected `{mentions}` in {body}");
 }
 
-pub async fn problem(response: reqwest::Response) -> (u16, String, Value) {
+pub async fn problem_details(response: reqwest::Response) -> (u16, String, Value) {
     let status = response.status().as_u16();
     let content_type =
         response.headers().get("content-type").map(|v| v.to_str().unwrap().to_string()).unwrap_or_default();

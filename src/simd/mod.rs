@@ -1,22 +1,73 @@
 //! Eight f64 lanes as one value, on three instruction sets: AVX-512 (one register), AVX2 (two)
-//! and portable arrays. The dense recursion is written once over [`Vector`] and compiled for each.
-//! Arrays of `[f64; 8]` alone were not enough: the compiler scalarised the recursion's state and
-//! regrouped it into vectors that straddle two modes, paying lane permutations every step.
+//! and portable arrays, and the dispatch that runs a [`Kernel`] on the widest the processor has.
+//! The batched free run and the acceleration sink are written once over [`Vector`] and compiled
+//! for each. Arrays of `[f64; 8]` alone were not enough: the compiler scalarised the recursion's
+//! state and regrouped it into vectors that straddle two modes, paying lane permutations every step.
 //!
 //! Every implementation rounds identically (products that are summed are fused multiply-adds, the
 //! same operation in hardware and in `f64::mul_add`), so a lane's result does not depend on which
 //! one runs.
 //!
 //! Soundness: a vector value can only be made from an [`Vector::Isa`] value, and the x86 ones
-//! ([`Avx512Isa`], [`Avx2Isa`]) only come from detecting their instructions on the running
-//! processor. Every method of a vector therefore runs where its instructions exist. Speed is a
-//! separate matter: the intrinsics inline only into functions compiled for the features
-//! (`dispatch`); elsewhere they become calls, correct but many times slower.
+//! (`Avx512Isa`, `Avx2Isa`) only come from detecting their instructions on the running processor.
+//! Every method of a vector therefore runs where its instructions exist. Speed is a separate
+//! matter: the intrinsics inline only into functions compiled for the features ([`run_widest`]);
+//! elsewhere they become calls, correct but many times slower. This is the only module with
+//! `unsafe` code.
 
-use super::{LANES, Lanes};
+#![allow(unsafe_code)]
+
+/// Samples per batch: one AVX-512 register of f64, two AVX2 ones.
+pub const LANES: usize = 8;
+
+/// One value of every sample of a batch.
+pub type Lanes = [f64; LANES];
+
+/// Work written once over the vector type: [`run_widest`] runs it on the widest vectors the
+/// processor has, compiled for their instructions.
+pub trait Kernel {
+    type Output;
+    /// Everything this calls in its loops must be `#[inline(always)]`, so that it is compiled for
+    /// V's instructions too (a function that is not inlined keeps the baseline code, and a vector
+    /// method that is not inlined becomes a call per operation).
+    fn run<V: Vector>(self, isa: V::Isa) -> Self::Output;
+}
+
+/// Runs `kernel` on AVX-512 where the processor has it, else on AVX2, else on portable arrays.
+pub fn run_widest<K: Kernel>(kernel: K) -> K::Output {
+    #[cfg(target_arch = "x86_64")]
+    {
+        if let Some(isa) = Avx512Isa::detect() {
+            // SAFETY: `isa` was detected, so the processor has the features `on_avx512` is
+            // compiled for.
+            return unsafe { on_avx512(kernel, isa) };
+        }
+        if let Some(isa) = Avx2Isa::detect() {
+            // SAFETY: as above, for `on_avx2`.
+            return unsafe { on_avx2(kernel, isa) };
+        }
+    }
+    kernel.run::<Lanes>(())
+}
+
+/// # Safety
+/// The processor must have AVX-512F and FMA, which `isa` proves.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx512f,fma")]
+unsafe fn on_avx512<K: Kernel>(kernel: K, isa: Avx512Isa) -> K::Output {
+    kernel.run::<Avx512>(isa)
+}
+
+/// # Safety
+/// The processor must have AVX2 and FMA, which `isa` proves.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+unsafe fn on_avx2<K: Kernel>(kernel: K, isa: Avx2Isa) -> K::Output {
+    kernel.run::<Avx2>(isa)
+}
 
 /// Lane-wise arithmetic on eight f64.
-pub(super) trait Vector: Copy {
+pub trait Vector: Copy {
     /// Proof that the instructions the type uses exist here; values are made only from it.
     type Isa: Copy;
     fn splat(isa: Self::Isa, x: f64) -> Self;
@@ -76,9 +127,7 @@ impl Vector for Lanes {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub(crate) use x86::Avx512Isa;
-#[cfg(target_arch = "x86_64")]
-pub(super) use x86::{Avx2, Avx2Isa, Avx512};
+use x86::{Avx2, Avx2Isa, Avx512, Avx512Isa};
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {

@@ -1,13 +1,15 @@
 //! The service over real HTTP: a server on port 0 against a real SQLite file. The whole flow at
 //! small size, bad input as problem+json, cancellation, and a restart in the middle of a job.
 
-mod common;
-
-use common::app::{TestApp, assert_problem, database, problem, spawn_app, spawn_app_configured, spawn_app_with};
+use crate::harness::app::{
+    TestApp, assert_problem, database, problem_details, spawn_app, spawn_app_configured, spawn_app_with,
+};
+use crate::harness::fixture;
 use serde_json::{Value, json};
 use std::time::{Duration, Instant};
-use windmeta::problem::{Problem, ProblemSpec};
-use windmeta::surrogate::{CalibrationOptions, Silent, calibrate};
+use windmeta::progress::Silent;
+use windmeta::study::{Study, StudySpec};
+use windmeta::surrogate::{CalibrationOptions, calibrate};
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn calibrate_follow_fetch_and_sample() {
@@ -45,9 +47,9 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(metamodel["models"].as_array().unwrap().len(), 3);
     // The experiments beyond the 20 selection ones ran as tasks; the metamodel is bit for bit the
     // one the same calibration gives in one process.
-    let spec = ProblemSpec { preset: Some("frame40-kn".into()), duration_s: Some(30.0), ..ProblemSpec::default() };
+    let spec = StudySpec { preset: Some("frame40-kn".into()), duration_s: Some(30.0), ..StudySpec::default() };
     let options = CalibrationOptions { experiments: 32, seed: 3, ..CalibrationOptions::default() };
-    let local = calibrate(&Problem::from_spec(&spec).unwrap(), &options, &Silent).unwrap();
+    let local = calibrate(&Study::from_spec(&spec).unwrap(), &options, &Silent).unwrap();
     assert_eq!(metamodel["models"], serde_json::to_value(&local.models).unwrap());
     assert_eq!(app.get("/v1/metamodels").await.1["metamodels"][0]["id"], id.as_str());
 
@@ -57,7 +59,7 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!((study["floors"].as_u64(), study["damper_groups"].as_u64()), (Some(40), Some(4)), "{study}");
     assert_eq!((study["duration_s"].as_f64(), study["time_step_s"].as_f64()), (Some(30.0), Some(0.01)));
     assert_eq!(study["responses"].as_array().unwrap().len(), 5);
-    let studied = Problem::from_spec(&spec).unwrap();
+    let studied = Study::from_spec(&spec).unwrap();
     let design = windmeta::surrogate::design(&studied, &options).unwrap().points;
     let inputs = study["inputs"].as_array().unwrap();
     assert_eq!(inputs.len(), studied.inputs.inputs.len());
@@ -108,7 +110,7 @@ async fn calibrate_follow_fetch_and_sample() {
     let (status, in_newtons) = app.post_json(&path, forces).await;
     assert_eq!((status, in_newtons["thresholds"].as_array().map(Vec::len)), (200, Some(3)), "{in_newtons}");
     let (s, ct, body) =
-        problem(app.post(&path, json!({"samples": 8, "response": "damper_force", "floor": 99})).await).await;
+        problem_details(app.post(&path, json!({"samples": 8, "response": "damper_force", "floor": 99})).await).await;
     assert_problem(s, &ct, &body, 422, "floor");
     // A damper group's envelope: the largest of its dampers', at least the one below floor 32
     // (group 4), on the same storms.
@@ -125,7 +127,7 @@ async fn calibrate_follow_fetch_and_sample() {
         (json!({"samples": 8, "response": "damper_force", "group": 1, "floor": 3}), "group"),
         (json!({"samples": 8, "response": "damper_force", "group": 9}), "group"),
     ] {
-        let (s, ct, body) = problem(app.post(&path, wrong).await).await;
+        let (s, ct, body) = problem_details(app.post(&path, wrong).await).await;
         assert_problem(s, &ct, &body, 422, field);
     }
     // The profile of the 90 % peak drift up the height, from the same storms as the curve: the
@@ -146,9 +148,9 @@ async fn calibrate_follow_fetch_and_sample() {
         let at = |key: &str| profile[key][i].as_f64().unwrap();
         assert!(at("lower") <= at("values") && at("values") <= at("upper") && at("values") > 0.0, "{profile}");
     }
-    let (s, ct, body) = problem(app.post(&path, json!({"samples": 8, "profile_quantile": 1.5})).await).await;
+    let (s, ct, body) = problem_details(app.post(&path, json!({"samples": 8, "profile_quantile": 1.5})).await).await;
     assert_problem(s, &ct, &body, 422, "profile_quantile");
-    let (s, ct, body) = problem(app.post(&path, json!({"samples": 8, "profile_quantile": 0.99})).await).await;
+    let (s, ct, body) = problem_details(app.post(&path, json!({"samples": 8, "profile_quantile": 0.99})).await).await;
     assert_problem(s, &ct, &body, 422, "samples");
     // A CSV names the threshold's unit.
     let csv = app
@@ -182,7 +184,7 @@ async fn calibrate_follow_fetch_and_sample() {
         (json!({"samples": 30, "response": "drift", "floor": 99}), "floor"),
     ] {
         let asked = app.client.post(format!("{}{path}", app.address)).header("prefer", "respond-async").json(&wrong);
-        let (s, ct, body) = problem(asked.send().await.unwrap()).await;
+        let (s, ct, body) = problem_details(asked.send().await.unwrap()).await;
         assert_problem(s, &ct, &body, 422, field);
     }
 
@@ -231,13 +233,14 @@ async fn calibrate_follow_fetch_and_sample() {
         "the operation's answer is the same"
     );
     // Checked before anything is queued, however large the request.
-    let (s, ct, body) = problem(app.post(&hazard, json!({"floor": 0, "samples": 50000})).await).await;
+    let (s, ct, body) = problem_details(app.post(&hazard, json!({"floor": 0, "samples": 50000})).await).await;
     assert_problem(s, &ct, &body, 422, "floor");
-    let (s, ct, body) = problem(app.post(&hazard, json!({"return_periods": [0.5]})).await).await;
+    let (s, ct, body) = problem_details(app.post(&hazard, json!({"return_periods": [0.5]})).await).await;
     assert_problem(s, &ct, &body, 422, "return_periods");
-    let (s, ct, body) =
-        problem(app.post(&hazard, json!({"climate": {"distribution": "gumbel", "location": 100, "scale": 30}})).await)
-            .await;
+    let (s, ct, body) = problem_details(
+        app.post(&hazard, json!({"climate": {"distribution": "gumbel", "location": 100, "scale": 30}})).await,
+    )
+    .await;
     assert_problem(s, &ct, &body, 422, "climate");
 
     // Under the input model's own wind law the rarest strata reach speeds far beyond this small
@@ -257,7 +260,7 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(fragility["curves"].as_array().unwrap().len(), 2);
     assert_eq!(fragility["curves"][0]["probability"].as_array().unwrap().len(), 3);
     let (s, ct, body) =
-        problem(app.post(&format!("/v1/metamodels/{id}/fragility"), json!({"samples": 10})).await).await;
+        problem_details(app.post(&format!("/v1/metamodels/{id}/fragility"), json!({"samples": 10})).await).await;
     assert_problem(s, &ct, &body, 422, "thresholds");
 
     // A validation job against the reference on fresh samples.
@@ -280,10 +283,10 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(done["result"]["fixed"], json!({"wind_speed": 38.0}));
     assert_eq!(done["metamodel_id"], id.as_str(), "a validation names the metamodel it validates");
     let (s, ct, body) =
-        problem(app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 1})).await).await;
+        problem_details(app.post(&format!("/v1/metamodels/{id}/validations"), json!({"samples": 1})).await).await;
     assert_problem(s, &ct, &body, 422, "samples");
     let held = json!({"samples": 4, "fixed": {"damping_ratio": -1}});
-    let (s, ct, body) = problem(app.post(&format!("/v1/metamodels/{id}/validations"), held).await).await;
+    let (s, ct, body) = problem_details(app.post(&format!("/v1/metamodels/{id}/validations"), held).await).await;
     assert_problem(s, &ct, &body, 422, "fixed.damping_ratio");
 
     let metrics = app.client.get(format!("{}/metrics", app.address)).send().await.unwrap().text().await.unwrap();
@@ -310,24 +313,24 @@ async fn bad_input_is_refused_as_problem_json() {
         .send()
         .await
         .unwrap();
-    let (s, ct, body) = problem(raw).await;
+    let (s, ct, body) = problem_details(raw).await;
     assert_problem(s, &ct, &body, 400, "");
-    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"experiments": "many"})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/calibrations", json!({"experiments": "many"})).await).await;
     assert_problem(s, &ct, &body, 422, "experiments");
-    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"preset": "frame41"})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/calibrations", json!({"preset": "frame41"})).await).await;
     assert_problem(s, &ct, &body, 422, "preset");
-    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"experiments": -5})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/calibrations", json!({"experiments": -5})).await).await;
     assert_problem(s, &ct, &body, 422, "experiments");
-    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"experiments": 2})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/calibrations", json!({"experiments": 2})).await).await;
     assert_problem(s, &ct, &body, 422, "experiments");
-    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"duration_s": 0})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/calibrations", json!({"duration_s": 0})).await).await;
     assert_problem(s, &ct, &body, 422, "duration_s");
-    let (s, ct, body) = problem(
+    let (s, ct, body) = problem_details(
         app.post("/v1/calibrations", json!({"inputs": {"stiffness": {"distribution": "constant", "value": 1}}})).await,
     )
     .await;
     assert_problem(s, &ct, &body, 422, "unknown input");
-    let (s, ct, body) = problem(app.post("/v1/calibrations", json!({"surprise": 1})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/calibrations", json!({"surprise": 1})).await).await;
     assert_problem(s, &ct, &body, 422, "surprise");
     // Wind coverage: a range, or a climate, each checked and named; not both.
     let gumbel = json!({"distribution": "gumbel", "location": 25, "scale": 2.5});
@@ -344,18 +347,18 @@ async fn bad_input_is_refused_as_problem_json() {
             "holds wind_speed fixed",
         ),
     ] {
-        let (s, ct, problem_body) = problem(app.post("/v1/calibrations", body.clone()).await).await;
+        let (s, ct, problem_body) = problem_details(app.post("/v1/calibrations", body.clone()).await).await;
         assert_problem(s, &ct, &problem_body, 422, field);
     }
     let huge = json!({"preset": "frame40", "structure": {"mass": vec![vec![1.0; 200]; 200]}});
-    let (s, ct, body) = problem(app.post("/v1/calibrations", huge).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/calibrations", huge).await).await;
     assert_problem(s, &ct, &body, 413, "");
     let (s, ct, body) =
-        problem(app.client.get(format!("{}/v1/operations/nope", app.address)).send().await.unwrap()).await;
+        problem_details(app.client.get(format!("{}/v1/operations/nope", app.address)).send().await.unwrap()).await;
     assert_problem(s, &ct, &body, 404, "nope");
-    let (s, ct, body) = problem(app.post("/v1/metamodels/nope/exceedance", json!({"samples": 10})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/metamodels/nope/exceedance", json!({"samples": 10})).await).await;
     assert_problem(s, &ct, &body, 404, "nope");
-    let (s, ct, body) = problem(app.post("/v1/metamodels/nope/exceedance", json!({"samples": -1})).await).await;
+    let (s, ct, body) = problem_details(app.post("/v1/metamodels/nope/exceedance", json!({"samples": -1})).await).await;
     assert_problem(s, &ct, &body, 422, "samples");
     app.stop().await;
 }
@@ -373,7 +376,7 @@ async fn idempotency_keys_replay_the_operation() {
     let again = send(body.clone()).await.unwrap();
     assert_eq!(again.status().as_u16(), 202);
     assert_eq!(again.headers()["location"], first_location);
-    let (s, ct, problem_body) = problem(send(json!({"experiments": 5, "duration_s": 10})).await.unwrap()).await;
+    let (s, ct, problem_body) = problem_details(send(json!({"experiments": 5, "duration_s": 10})).await.unwrap()).await;
     assert_problem(s, &ct, &problem_body, 422, "Idempotency-Key");
     let (_, list) = app.get("/v1/operations").await;
     assert_eq!(list["operations"].as_array().unwrap().len(), 1);
@@ -453,7 +456,8 @@ async fn a_lease_in_doubt_gives_the_job_back_instead_of_cancelling_it() {
 async fn api_keys_and_cors() {
     let app = spawn_app_with(&database("auth"), vec!["s3cret".into()], vec!["https://office.example".into()]).await;
     assert_eq!(app.get("/healthz").await.0, 200);
-    let (s, ct, body) = problem(app.client.get(format!("{}/v1/presets", app.address)).send().await.unwrap()).await;
+    let (s, ct, body) =
+        problem_details(app.client.get(format!("{}/v1/presets", app.address)).send().await.unwrap()).await;
     assert_problem(s, &ct, &body, 401, "Bearer");
     let wrong = app.client.get(format!("{}/v1/presets", app.address)).bearer_auth("guess").send().await.unwrap();
     assert_eq!(wrong.status().as_u16(), 401);
@@ -647,9 +651,9 @@ async fn every_documented_status_is_real() {
     let contract = windmeta::service::openapi_for(&app.config);
     assert_eq!(spec, serde_json::to_value(contract).unwrap(), "/openapi.json is the contract");
     assert_eq!(spec["components"]["schemas"]["ExceedanceRequest"]["properties"]["samples"]["maximum"], 2000.0);
-    let (operation, metamodel) =
-        calibrate_over_http(&app, json!({"experiments": 8, "duration_s": 30, "seed": 3})).await;
-    let (_, doomed_metamodel) = calibrate_over_http(&app, json!({"experiments": 4, "duration_s": 10})).await;
+    let (operation, _) = calibrate_over_http(&app, json!({"experiments": 4, "duration_s": 10})).await;
+    let metamodel = fixture::install(&app, fixture::STORM_S).await;
+    let doomed_metamodel = fixture::install(&app, fixture::STORM_S).await;
     let ids = Ids { metamodel, doomed_metamodel, operation };
     let documented = documented_statuses(&spec);
     eprintln!("provoking {} documented (operation, status) pairs", documented.len());

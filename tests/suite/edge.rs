@@ -3,25 +3,13 @@
 //! synchronous sampling (permits, timeout, a client that leaves), a cache that cannot undo a
 //! delete, idempotency keys that expire.
 
-mod common;
-
-use common::app::{TestApp, assert_problem, database, problem, spawn_app, spawn_app_configured};
+use crate::harness::app::{TestApp, assert_problem, database, problem_details, spawn_app, spawn_app_configured};
+use crate::harness::fixture;
 use serde_json::{Value, json};
 use std::process::Command;
 use std::time::{Duration, Instant};
 use windmeta::error::Error;
 use windmeta::service::{Application, ServeArgs};
-
-/// A metamodel stored through the API; `duration_s` sets how long sampling it takes, and enough
-/// experiments keep its free runs from diverging.
-async fn calibrated(app: &TestApp, duration_s: f64, experiments: usize) -> String {
-    let body = json!({"experiments": experiments, "duration_s": duration_s, "seed": 2});
-    let op: Value = app.post("/v1/calibrations", body).await.json().await.unwrap();
-    let id = op["id"].as_str().unwrap();
-    let done = app.wait_for(id, &["succeeded", "failed"], Duration::from_secs(300)).await;
-    assert_eq!(done["state"], "succeeded", "{done}");
-    done["metamodel_id"].as_str().unwrap().to_string()
-}
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn empty_or_blank_api_keys_are_refused_at_start_up() {
@@ -104,7 +92,7 @@ async fn costly_calibrations_are_refused_before_anything_is_queued() {
     ];
     for (body, field) in cases {
         let started = Instant::now();
-        let (s, ct, answer) = problem(app.post("/v1/calibrations", body.clone()).await).await;
+        let (s, ct, answer) = problem_details(app.post("/v1/calibrations", body.clone()).await).await;
         assert_problem(s, &ct, &answer, 422, field);
         assert!(started.elapsed() < Duration::from_secs(10), "{body}: took {:?}", started.elapsed());
     }
@@ -116,7 +104,7 @@ async fn costly_calibrations_are_refused_before_anything_is_queued() {
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn hostile_sampling_requests_are_refused_and_a_delete_sticks() {
     let app = spawn_app(&database("sampling")).await;
-    let id = calibrated(&app, 20.0, 6).await;
+    let id = fixture::install(&app, fixture::STORM_S).await;
     let path = format!("/v1/metamodels/{id}/exceedance");
     let cases: Vec<(Value, &str)> = vec![
         (json!({"thresholds": [-1e308, 1e308]}), "thresholds"),
@@ -135,18 +123,18 @@ async fn hostile_sampling_requests_are_refused_and_a_delete_sticks() {
     ];
     for (body, field) in cases {
         let r = app.client.post(format!("{}{path}", app.address)).header("accept", "image/svg+xml").json(&body);
-        let (s, ct, answer) = problem(r.send().await.unwrap()).await;
+        let (s, ct, answer) = problem_details(r.send().await.unwrap()).await;
         assert_problem(s, &ct, &answer, 422, field);
     }
     let validation = format!("/v1/metamodels/{id}/validations");
-    let (s, ct, answer) = problem(app.post(&validation, json!({"samples": 1_000_000})).await).await;
+    let (s, ct, answer) = problem_details(app.post(&validation, json!({"samples": 1_000_000})).await).await;
     assert_problem(s, &ct, &answer, 422, "samples");
 
     // Loaded into the cache by the requests above; deleted; not served again.
     assert_eq!(app.post(&path, json!({"samples": 16})).await.status().as_u16(), 200);
     let deleted = app.client.delete(format!("{}/v1/metamodels/{id}", app.address)).send().await.unwrap();
     assert_eq!(deleted.status().as_u16(), 204);
-    let (s, ct, answer) = problem(app.post(&path, json!({"samples": 16})).await).await;
+    let (s, ct, answer) = problem_details(app.post(&path, json!({"samples": 16})).await).await;
     assert_problem(s, &ct, &answer, 404, &id);
     app.stop().await;
 }
@@ -163,7 +151,7 @@ async fn synchronous_sampling_is_bounded_timed_out_and_stopped_when_the_client_l
         args.max_sync_samples = 20_000;
     })
     .await;
-    let id = calibrated(&app, 900.0, 30).await;
+    let id = fixture::install(&app, 900.0).await;
     let url = format!("{}/v1/metamodels/{id}/exceedance", app.address);
     let long = json!({"samples": 20_000});
     let small = json!({"samples": 8});
@@ -178,7 +166,7 @@ async fn synchronous_sampling_is_bounded_timed_out_and_stopped_when_the_client_l
     assert!(busy.headers().contains_key("retry-after"));
     let first = first.await.unwrap();
     let waited = started.elapsed();
-    let (s, ct, answer) = problem(first).await;
+    let (s, ct, answer) = problem_details(first).await;
     assert_problem(s, &ct, &answer, 503, "not answered within 1 s");
     assert!(waited < Duration::from_secs(3), "the timeout took {waited:?}");
     // The timed-out sampling stopped, so its permit comes back at once.

@@ -1,12 +1,12 @@
 //! A study's storms and its reference runs: modal forces drawn for a sample (by the modal fast
 //! path or the floor field), and one storm through the reduced- or full-order reference model.
 
-use super::{PhysicalParameters, Problem};
-use crate::cancel::Never;
+use super::{PhysicalParameters, Study};
 use crate::dynamics::{FloorResponse, ModalMotion, integrate_full, integrate_reduced};
 use crate::error::Result;
+use crate::progress::Silent;
 use crate::uncertainty::{Rng, rng_from_seed, stream_seed};
-use crate::wind::{CoarseModalForces, ModalForces, Workspace};
+use crate::wind::{CoarseModalForces, ModalForces, TransformWorkspace};
 use serde::{Deserialize, Serialize};
 use std::time::Instant;
 
@@ -52,14 +52,14 @@ impl StormRun {
     }
 }
 
-impl Problem {
+impl Study {
     /// A storm's modal forces on the wind's generation grid, by the fast path or the full field,
     /// with the transforms of `workspace`.
     pub fn coarse_forces(
         &self,
         p: &PhysicalParameters,
         path: WindPath,
-        workspace: &mut Workspace,
+        workspace: &mut TransformWorkspace,
         rng: &mut Rng,
     ) -> Result<CoarseModalForces> {
         match path {
@@ -72,7 +72,7 @@ impl Problem {
 
     /// A storm's modal forces on the storm's grid.
     pub fn modal_forces(&self, p: &PhysicalParameters, path: WindPath, rng: &mut Rng) -> Result<ModalForces> {
-        Ok(self.coarse_forces(p, path, &mut Workspace::default(), rng)?.on_grid(&self.storm))
+        Ok(self.coarse_forces(p, path, &mut TransformWorkspace::default(), rng)?.on_grid(&self.storm))
     }
 
     /// Sample k of a run seeded with `seed`: its physical parameters and its storm's modal forces on
@@ -84,7 +84,7 @@ impl Problem {
         path: WindPath,
         seed: u64,
         k: usize,
-        workspace: &mut Workspace,
+        workspace: &mut TransformWorkspace,
     ) -> Result<(PhysicalParameters, CoarseModalForces)> {
         let p = self.parameters(x)?;
         let forces = self.coarse_forces(&p, path, workspace, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
@@ -104,7 +104,7 @@ impl Problem {
                 let wind_seconds = started.elapsed().as_secs_f64();
                 let started = Instant::now();
                 let response =
-                    integrate_reduced(&self.sample_modes(&p), p.damping_ratio, &dampers, &forces, dt, &Never)?;
+                    integrate_reduced(&self.sample_modes(&p), p.damping_ratio, &dampers, &forces, dt, &Silent)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
                 Ok(StormRun {
                     roof: response.roof(),
@@ -121,7 +121,7 @@ impl Problem {
                 let wind_seconds = started.elapsed().as_secs_f64();
                 let started = Instant::now();
                 let system = self.full_system(&p);
-                let response = integrate_full(&system, &dampers, &forces, dt, &Never)?;
+                let response = integrate_full(&system, &dampers, &forces, dt, &Silent)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
                 let roof = response.displacements.last().cloned().unwrap_or_default();
                 Ok(StormRun {

@@ -2,13 +2,13 @@
 //! replica killed in the middle of a job loses it to another that finishes it, and no job completes
 //! twice. Skipped, with the reason printed, where no PostgreSQL is reachable.
 
+use crate::harness::postgres::fresh_postgres;
 use serde_json::{Value, json};
 use sqlx::Row;
 use std::io::{BufRead, BufReader};
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
-use windmeta::service::testing::fresh_postgres;
 
 struct Replica {
     child: Child,

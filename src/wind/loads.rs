@@ -1,9 +1,10 @@
-//! Quasi-steady floor forces (Eq. 14, linearised) and their projection Q = Φᵀ f on the modes.
+//! The wind model of one building at one site: quasi-steady floor forces (Eq. 14, linearised),
+//! simulated as a full field on every floor or projected on the modes before interpolation.
 
-use super::modal::CoarseModalForces;
+use super::histories::{CoarseModalForces, FloorForces};
 use super::spectral::{CoarseSeries, SpectralGrid, simulate, simulate_coarse};
 use super::spectrum::FieldSpectrum;
-use super::{StormGrid, WindSite, Workspace};
+use super::{StormGrid, TransformWorkspace, WindSite};
 use crate::error::{Error, Result};
 use crate::structure::Structure;
 use crate::uncertainty::Rng;
@@ -17,42 +18,6 @@ pub struct WindLoads {
     pub heights: Vec<f64>,
     /// η_j = ½ ρ C̄ A_j with A_j = h_j W_j (kg/m): f_j = η_j (v̄_j² + 2 v̄_j v_j).
     pub exposure: Vec<f64>,
-}
-
-/// Total wind force on every floor over a storm.
-#[derive(Debug, Clone)]
-pub struct FloorForces {
-    /// Mean force on each floor (N).
-    pub mean: Vec<f64>,
-    /// Force history of each floor (N), mean included: `series[floor][step]`.
-    pub series: Vec<Vec<f64>>,
-}
-
-/// Generalized forces of the retained modes over a storm.
-#[derive(Debug, Clone)]
-pub struct ModalForces {
-    /// Mean generalized force of each mode (N).
-    pub mean: Vec<f64>,
-    /// History of each mode (N), mean included: `series[mode][step]`.
-    pub series: Vec<Vec<f64>>,
-}
-
-impl FloorForces {
-    /// Q_m(t) = Σ_j Φ_jm f_j(t).
-    pub fn project(&self, shapes: MatRef<'_, f64>) -> ModalForces {
-        let modes = shapes.ncols();
-        let steps = self.series.first().map_or(0, Vec::len);
-        let mut series = vec![vec![0.0; steps]; modes];
-        let mut mean = vec![0.0; modes];
-        for (j, floor) in self.series.iter().enumerate() {
-            for m in 0..modes {
-                let phi = shapes[(j, m)];
-                mean[m] += phi * self.mean[j];
-                series[m].iter_mut().zip(floor).for_each(|(q, f)| *q += phi * f);
-            }
-        }
-        ModalForces { mean, series }
-    }
 }
 
 impl WindLoads {
@@ -123,7 +88,7 @@ impl WindLoads {
         wind_speed: f64,
         shapes: MatRef<'_, f64>,
         duration: f64,
-        workspace: &mut Workspace,
+        workspace: &mut TransformWorkspace,
         rng: &mut Rng,
     ) -> Result<CoarseModalForces> {
         Self::check_speed(wind_speed)?;

@@ -2,10 +2,10 @@
 //! dampers on, and the reduced model (3 modes) against the full-order model on the same storm.
 
 use faer::Mat;
-use windmeta::cancel::Never;
 use windmeta::dynamics::{Dampers, FullSystem, SampleModel, integrate_full, integrate_reduced};
-use windmeta::problem::Problem;
+use windmeta::progress::Silent;
 use windmeta::structure::Modes;
+use windmeta::study::Study;
 use windmeta::uncertainty::rng_from_seed;
 use windmeta::wind::{FloorForces, ModalForces};
 
@@ -38,7 +38,7 @@ fn modal_integrator_is_exact_for_a_step_load() {
     let dt = 0.05;
     let steps = 2001;
     let forces = ModalForces { mean: vec![0.0], series: vec![vec![force; steps]] };
-    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt, &Never)
+    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt, &Silent)
         .unwrap()
         .displacements
         .remove(0);
@@ -61,7 +61,7 @@ fn modal_integrator_matches_the_harmonic_closed_form() {
     let steps = 3001;
     let series = (0..steps).map(|i| force * (forcing * i as f64 * dt).sin()).collect();
     let forces = ModalForces { mean: vec![0.0], series: vec![series] };
-    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt, &Never)
+    let y = integrate_reduced(&oscillator(omega, mass), zeta, &no_dampers(), &forces, dt, &Silent)
         .unwrap()
         .displacements
         .remove(0);
@@ -84,7 +84,7 @@ fn full_order_integrator_matches_the_harmonic_closed_form() {
     let system = FullSystem { size: 1, mass: vec![mass], damping: vec![2.0 * zeta * omega * mass], stiffness: vec![k] };
     let series = (0..steps).map(|i| force * (forcing * i as f64 * dt).sin()).collect();
     let forces = FloorForces { mean: vec![0.0], series: vec![series] };
-    let u = integrate_full(&system, &no_dampers(), &forces, dt, &Never).unwrap().displacements.remove(0);
+    let u = integrate_full(&system, &no_dampers(), &forces, dt, &Silent).unwrap().displacements.remove(0);
     let amplitude = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     for (i, ui) in u.iter().enumerate() {
         let exact = harmonic_from_rest(i as f64 * dt, omega, zeta, force / k, forcing);
@@ -93,8 +93,8 @@ fn full_order_integrator_matches_the_harmonic_closed_form() {
 }
 
 /// The kN dampers at their upper bound (the most nonlinear case) on a 60 s storm.
-fn stiff_damper_problem(duration: f64, dt: f64) -> (Problem, Vec<f64>) {
-    let mut p = Problem::preset("frame40-kn").unwrap().with_storm(duration, dt).unwrap();
+fn stiff_damper_problem(duration: f64, dt: f64) -> (Study, Vec<f64>) {
+    let mut p = Study::preset("frame40-kn").unwrap().with_storm(duration, dt).unwrap();
     for g in 1..=4 {
         p.inputs = p.inputs.clone().with_fixed(&format!("damper_c{g}"), 1.0e5).unwrap();
     }
@@ -123,7 +123,9 @@ fn reduced_model_converges_as_the_time_step_shrinks() {
         .iter()
         .map(|&every| {
             let f = ModalForces { mean: forces.mean.clone(), series: subsample(&forces.series, every) };
-            integrate_reduced(&modes, params.damping_ratio, &dampers, &f, finest * every as f64, &Never).unwrap().roof()
+            integrate_reduced(&modes, params.damping_ratio, &dampers, &f, finest * every as f64, &Silent)
+                .unwrap()
+                .roof()
         })
         .collect();
     let reference = &roofs[3];
@@ -149,7 +151,7 @@ fn full_order_model_converges_as_the_time_step_shrinks() {
         .iter()
         .map(|&every| {
             let f = FloorForces { mean: forces.mean.clone(), series: subsample(&forces.series, every) };
-            integrate_full(&system, &dampers, &f, finest * every as f64, &Never).unwrap().displacements.pop().unwrap()
+            integrate_full(&system, &dampers, &f, finest * every as f64, &Silent).unwrap().displacements.pop().unwrap()
         })
         .collect();
     let reference = &roofs[3];
@@ -163,17 +165,17 @@ fn full_order_model_converges_as_the_time_step_shrinks() {
 
 #[test]
 fn reduced_and_full_order_agree_on_the_same_storm() {
-    let p = Problem::preset("frame40-kn").unwrap().with_storm(300.0, 0.01).unwrap();
+    let p = Study::preset("frame40-kn").unwrap().with_storm(300.0, 0.01).unwrap();
     let x = p.inputs.means();
     let params = p.parameters(&x).unwrap();
     let floor_forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(21)).unwrap();
     let modal_forces = floor_forces.project(p.modes.shapes.as_ref());
     let dampers = p.dampers(&params).unwrap();
     let modes = p.sample_modes(&params);
-    let reduced_run = integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, 0.01, &Never).unwrap();
+    let reduced_run = integrate_reduced(&modes, params.damping_ratio, &dampers, &modal_forces, 0.01, &Silent).unwrap();
     let reduced = reduced_run.roof();
     let system = p.full_system(&params);
-    let mut full_motion = integrate_full(&system, &dampers, &floor_forces, 0.01, &Never).unwrap();
+    let mut full_motion = integrate_full(&system, &dampers, &floor_forces, 0.01, &Silent).unwrap();
     let full = full_motion.displacements.pop().unwrap();
     let peak = |u: &[f64]| u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let mean = |u: &[f64]| u.iter().sum::<f64>() / u.len() as f64;
@@ -217,7 +219,7 @@ fn reduced_and_full_order_agree_on_the_same_storm() {
 /// force by at most 2^{1−α} c (Σ|w| δ)^α.
 #[test]
 fn full_order_motion_satisfies_the_equations_of_motion() {
-    let p = Problem::preset("frame40-kn").unwrap().with_storm(20.0, 0.01).unwrap();
+    let p = Study::preset("frame40-kn").unwrap().with_storm(20.0, 0.01).unwrap();
     let x = p.inputs.means();
     let params = p.parameters(&x).unwrap();
     let forces = p.wind.floor_forces(params.wind_speed, &p.storm, &mut rng_from_seed(8)).unwrap();
@@ -225,7 +227,7 @@ fn full_order_motion_satisfies_the_equations_of_motion() {
     let n = system.size;
     let scale = forces.series.iter().flatten().fold(0.0f64, |m, f| m.max(f.abs()));
     for dampers in [no_dampers(), p.dampers(&params).unwrap()] {
-        let motion = integrate_full(&system, &dampers, &forces, 0.01, &Never).unwrap();
+        let motion = integrate_full(&system, &dampers, &forces, 0.01, &Silent).unwrap();
         let delta = 1e-8 * motion.velocities.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
         let mut allowed: Vec<f64> = (0..n)
             .map(|i| 1e-9 * scale + (0..n).map(|j| system.mass[i * n + j].abs()).sum::<f64>() * 2.0 / 0.01 * delta)
@@ -269,24 +271,24 @@ fn full_order_motion_satisfies_the_equations_of_motion() {
 #[test]
 fn reference_runs_report_their_responses() {
     use windmeta::analysis::{Response, reference_peak};
-    use windmeta::problem::{Order, WindPath};
-    let problem = Problem::preset("frame40-kn").unwrap().with_storm(20.0, 0.01).unwrap();
-    let x = problem.inputs.means();
-    let roof = Response::Displacement { floor: problem.structure.floors() };
+    use windmeta::study::{Order, WindPath};
+    let study = Study::preset("frame40-kn").unwrap().with_storm(20.0, 0.01).unwrap();
+    let x = study.inputs.means();
+    let roof = Response::Displacement { floor: study.structure.floors() };
     for order in [Order::Reduced, Order::Full] {
-        let run = problem.reference_run(&x, order, WindPath::Field, &mut rng_from_seed(5)).unwrap();
-        assert_eq!(reference_peak(&problem, &x, &run, roof).unwrap(), run.peak());
-        let drift = reference_peak(&problem, &x, &run, Response::Drift { floor: 12 }).unwrap();
-        let stroke = reference_peak(&problem, &x, &run, Response::DamperStroke { floor: 12 }).unwrap();
-        let cos = problem.structure.dampers[11].cos_angle;
+        let run = study.reference_run(&x, order, WindPath::Field, &mut rng_from_seed(5)).unwrap();
+        assert_eq!(reference_peak(&study, &x, &run, roof).unwrap(), run.peak());
+        let drift = reference_peak(&study, &x, &run, Response::Drift { floor: 12 }).unwrap();
+        let stroke = reference_peak(&study, &x, &run, Response::DamperStroke { floor: 12 }).unwrap();
+        let cos = study.structure.dampers[11].cos_angle;
         assert!(drift > 0.0 && (stroke - cos * drift).abs() <= 1e-12 * stroke, "{order:?}: {stroke} vs {cos}·{drift}");
-        let force = reference_peak(&problem, &x, &run, Response::DamperForce { floor: 12 }).unwrap();
-        let acceleration = reference_peak(&problem, &x, &run, Response::Acceleration { floor: 40 }).unwrap();
+        let force = reference_peak(&study, &x, &run, Response::DamperForce { floor: 12 }).unwrap();
+        let acceleration = reference_peak(&study, &x, &run, Response::Acceleration { floor: 40 }).unwrap();
         assert!(force > 0.0 && acceleration > 0.0, "{order:?}: {force} N, {acceleration} m/s²");
         // The second group's envelope: the largest of its dampers' (storeys 11-20).
-        let envelope = reference_peak(&problem, &x, &run, Response::GroupDamperForce { group: 2 }).unwrap();
+        let envelope = reference_peak(&study, &x, &run, Response::GroupDamperForce { group: 2 }).unwrap();
         let largest = (11..=20)
-            .map(|floor| reference_peak(&problem, &x, &run, Response::DamperForce { floor }).unwrap())
+            .map(|floor| reference_peak(&study, &x, &run, Response::DamperForce { floor }).unwrap())
             .fold(0.0, f64::max);
         assert!(envelope == largest && envelope >= force, "{order:?}: {envelope} vs {largest}");
     }

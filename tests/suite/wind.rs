@@ -6,10 +6,8 @@
 //! errors (computed from the storms themselves) of its target, and the standard error itself must be
 //! small enough (≤ 5 %) that the comparison has power.
 
-mod common;
-
-use common::{band_mean, mean_and_standard_error, welch_cross};
-use windmeta::problem::Problem;
+use crate::harness::spectra::{band_mean, mean_and_standard_error, welch_cross};
+use windmeta::study::Study;
 use windmeta::uncertainty::rng_from_seed;
 use windmeta::wind::{CrossSpectralDensity, FieldSpectrum, ProjectedSpectrum, SpectralGrid, StormGrid, simulate};
 
@@ -17,16 +15,16 @@ const SPEED: f64 = 30.0;
 const STORMS: u64 = 12;
 const BANDS: [(f64, f64); 4] = [(0.25, 0.75), (0.75, 1.5), (1.5, 3.0), (3.0, 5.5)];
 
-fn problem() -> Problem {
-    Problem::preset("frame40").unwrap()
+fn study() -> Study {
+    Study::preset("frame40").unwrap()
 }
 
-fn grid(p: &Problem) -> SpectralGrid {
+fn grid(p: &Study) -> SpectralGrid {
     SpectralGrid { lines: p.wind.site.frequencies, cutoff: p.wind.site.cutoff_rad_s }
 }
 
 /// 2∫₀^{ω_up} S_Q,mm dω by the midpoint rule on a grid 100× finer than the simulation's.
-fn modal_variance_targets(p: &Problem, projection: &ProjectedSpectrum) -> Vec<f64> {
+fn modal_variance_targets(p: &Study, projection: &ProjectedSpectrum) -> Vec<f64> {
     let modes = projection.dim();
     let points = 100 * p.wind.site.frequencies;
     let h = p.wind.site.cutoff_rad_s / points as f64;
@@ -39,7 +37,7 @@ fn modal_variance_targets(p: &Problem, projection: &ProjectedSpectrum) -> Vec<f6
     sums
 }
 
-fn projection<'a>(p: &Problem, field: &'a FieldSpectrum) -> ProjectedSpectrum<'a> {
+fn projection<'a>(p: &Study, field: &'a FieldSpectrum) -> ProjectedSpectrum<'a> {
     let mean_forces_gain: Vec<f64> = p.wind.exposure.iter().zip(&field.mean_speeds).map(|(e, v)| 2.0 * e * v).collect();
     let shapes = &p.modes.shapes;
     ProjectedSpectrum {
@@ -50,7 +48,7 @@ fn projection<'a>(p: &Problem, field: &'a FieldSpectrum) -> ProjectedSpectrum<'a
 
 /// The discretised target of Deodatis' scheme: Σ_{m′≤m} Σ_l 2 H_mm′(ω_m′l)² Δω, with H the
 /// Cholesky factor of S_Q (by faer, independently of the simulation's own factorisation).
-fn modal_variance_discrete(p: &Problem, projection: &ProjectedSpectrum) -> Vec<f64> {
+fn modal_variance_discrete(p: &Study, projection: &ProjectedSpectrum) -> Vec<f64> {
     let modes = projection.dim();
     let g = grid(p);
     let dw = g.step();
@@ -75,7 +73,7 @@ fn modal_variance_discrete(p: &Problem, projection: &ProjectedSpectrum) -> Vec<f
 /// Δω/(6ω_c) ≈ 1 % for a spectral width ω_c ≈ 0.06 rad/s; 2 % bounds it.
 #[test]
 fn fast_path_variance_over_its_period_matches_the_target() {
-    let p = problem();
+    let p = study();
     let dt = 0.1;
     let period = grid(&p).period(3);
     let storm = StormGrid::new(period - dt, dt, &p.wind.site).unwrap();
@@ -95,7 +93,7 @@ fn fast_path_variance_over_its_period_matches_the_target() {
 /// Floor speeds of the full field: PSD (Eq. 19) and co-coherence (Eq. 22) against the targets.
 #[test]
 fn full_field_spectra_and_coherence_match_the_targets() {
-    let p = problem();
+    let p = study();
     let dt = p.wind.site.field_generation_step_s;
     let storm = StormGrid::new(900.0, dt, &p.wind.site).unwrap();
     let field = p.wind.spectrum(SPEED);
@@ -150,7 +148,7 @@ fn full_field_spectra_and_coherence_match_the_targets() {
 /// field is generated every 0.1 s and interpolated while the fast path is generated directly.
 #[test]
 fn modal_fast_path_equals_the_projected_field_in_law() {
-    let p = problem();
+    let p = study();
     let dt = 0.01;
     let storm = StormGrid::new(900.0, dt, &p.wind.site).unwrap();
     let shapes = p.modes.shapes.as_ref();

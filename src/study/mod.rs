@@ -1,5 +1,5 @@
 //! One study: a structure, its uncertain inputs by name, the wind site, the damper law and the storm
-//! grid (here, built from a [`ProblemSpec`] and checked), its storms and reference runs (`storms`).
+//! grid (here, built from a [`StudySpec`] and checked), its storms and reference runs (`storms`).
 //! The paper's case study comes as two presets (`presets`), with its input model (`inputs`).
 //!
 //! The input names are the same on the command line, in files and over HTTP: `youngs_modulus` (Pa),
@@ -13,7 +13,7 @@ mod storms;
 
 pub use inputs::PhysicalParameters;
 pub use presets::{DEFAULT_PRESET, PRESETS};
-pub use spec::ProblemSpec;
+pub use spec::StudySpec;
 pub use storms::{Order, StormRun, WindPath};
 
 use crate::dynamics::{Dampers, FullSystem};
@@ -25,10 +25,10 @@ use inputs::{check_admissible, default_inputs};
 
 /// A validated study.
 #[derive(Debug, Clone)]
-pub struct Problem {
+pub struct Study {
     pub name: String,
     /// The spec it was built from (inputs and storm as given, before later changes).
-    spec: ProblemSpec,
+    spec: StudySpec,
     pub structure: Structure,
     /// The retained modes at the reference stiffness and unit mass factor.
     pub modes: Modes,
@@ -46,13 +46,13 @@ pub struct Problem {
 /// coupled NARX dictionaries grow with them; the paper's building needs three.
 pub const MAX_MODES: usize = 10;
 
-impl Problem {
+impl Study {
     /// A preset study by name.
-    pub fn preset(name: &str) -> Result<Problem> {
-        Problem::from_spec(&ProblemSpec { preset: Some(name.to_string()), ..Default::default() })
+    pub fn preset(name: &str) -> Result<Study> {
+        Study::from_spec(&StudySpec { preset: Some(name.to_string()), ..Default::default() })
     }
 
-    pub fn from_spec(spec: &ProblemSpec) -> Result<Problem> {
+    pub fn from_spec(spec: &StudySpec) -> Result<Study> {
         let (name, structure, damper_scale) = presets::resolve(spec)?;
         let mut inputs = default_inputs(&structure, damper_scale);
         for (input, marginal) in &spec.inputs {
@@ -87,7 +87,7 @@ impl Problem {
                 ),
             ));
         }
-        Ok(Problem {
+        Ok(Study {
             name,
             spec: spec.clone(),
             structure,
@@ -103,7 +103,7 @@ impl Problem {
 
     /// A spec that rebuilds exactly this study: every input's marginal and the storm grid as they
     /// are now.
-    pub fn resolved_spec(&self) -> ProblemSpec {
+    pub fn resolved_spec(&self) -> StudySpec {
         let mut spec = self.spec.clone();
         spec.inputs = self.inputs.inputs.iter().map(|i| (i.name.clone(), i.marginal)).collect();
         spec.duration_s = Some(self.storm.duration);
@@ -113,7 +113,7 @@ impl Problem {
     }
 
     /// The same study on another storm grid.
-    pub fn with_storm(mut self, duration: f64, time_step: f64) -> Result<Problem> {
+    pub fn with_storm(mut self, duration: f64, time_step: f64) -> Result<Study> {
         self.storm = StormGrid::new(duration, time_step, &self.wind.site)?;
         Ok(self)
     }
@@ -160,7 +160,7 @@ mod tests {
 
     #[test]
     fn presets_have_the_papers_eight_inputs() {
-        let p = Problem::preset("frame40-kn").unwrap();
+        let p = Study::preset("frame40-kn").unwrap();
         let names: Vec<&str> = p.inputs.names().collect();
         assert_eq!(
             names,
@@ -176,22 +176,22 @@ mod tests {
             ]
         );
         assert_eq!(p.inputs.marginal("damper_c3").unwrap(), &Marginal::Uniform { lower: 0.0, upper: 1.0e5 });
-        let q = Problem::preset("frame40").unwrap();
+        let q = Study::preset("frame40").unwrap();
         assert_eq!(q.inputs.marginal("damper_c3").unwrap(), &Marginal::Uniform { lower: 0.0, upper: 100.0 });
     }
 
     #[test]
     fn bad_specs_are_refused_by_name() {
-        assert!(Problem::preset("frame41").unwrap_err().to_string().contains("unknown preset `frame41`"));
-        let mut spec = ProblemSpec { preset: Some("frame40".into()), ..Default::default() };
+        assert!(Study::preset("frame41").unwrap_err().to_string().contains("unknown preset `frame41`"));
+        let mut spec = StudySpec { preset: Some("frame40".into()), ..Default::default() };
         spec.inputs.insert("youngs_modulus".into(), Marginal::Normal { mean: 210e9, sd: 15e9 });
-        assert!(Problem::from_spec(&spec).unwrap_err().to_string().starts_with("inputs.youngs_modulus"));
-        let mut spec = ProblemSpec { preset: Some("frame40".into()), ..Default::default() };
+        assert!(Study::from_spec(&spec).unwrap_err().to_string().starts_with("inputs.youngs_modulus"));
+        let mut spec = StudySpec { preset: Some("frame40".into()), ..Default::default() };
         spec.inputs.insert("stiffness".into(), Marginal::Constant { value: 1.0 });
-        assert!(Problem::from_spec(&spec).unwrap_err().to_string().contains("unknown input"));
-        let spec = ProblemSpec { preset: Some("frame40".into()), duration_s: Some(-5.0), ..Default::default() };
-        assert!(Problem::from_spec(&spec).unwrap_err().to_string().starts_with("duration_s"));
-        let spec = ProblemSpec { preset: Some("frame40".into()), modes: Some(0), ..Default::default() };
-        assert!(Problem::from_spec(&spec).unwrap_err().to_string().starts_with("modes"));
+        assert!(Study::from_spec(&spec).unwrap_err().to_string().contains("unknown input"));
+        let spec = StudySpec { preset: Some("frame40".into()), duration_s: Some(-5.0), ..Default::default() };
+        assert!(Study::from_spec(&spec).unwrap_err().to_string().starts_with("duration_s"));
+        let spec = StudySpec { preset: Some("frame40".into()), modes: Some(0), ..Default::default() };
+        assert!(Study::from_spec(&spec).unwrap_err().to_string().starts_with("modes"));
     }
 }

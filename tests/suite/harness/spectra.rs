@@ -1,9 +1,4 @@
-//! Helpers shared by the integration tests: spectral estimates of simulated series, and the
-//! service under test ([`app`]).
-
-#![allow(dead_code)]
-
-pub mod app;
+//! Spectral estimates of simulated series, for the wind's tests.
 
 use rustfft::FftPlanner;
 use rustfft::num_complex::Complex;

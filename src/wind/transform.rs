@@ -23,7 +23,7 @@ use std::sync::Arc;
 /// One spectral line or transformed point.
 pub(super) type Bin = Complex<f32>;
 
-/// Shapes a [`Workspace`] keeps; the oldest is dropped past this, so that studies of many
+/// Shapes a [`TransformWorkspace`] keeps; the oldest is dropped past this, so that studies of many
 /// different discretisations, one after another, do not accumulate buffers.
 const KEPT_SHAPES: usize = 4;
 
@@ -32,12 +32,12 @@ const KEPT_SHAPES: usize = 4;
 /// afresh cost page faults). A caller that draws many storms keeps one per worker thread, e.g.
 /// through rayon's `map_init`.
 #[derive(Default)]
-pub struct Workspace {
+pub struct TransformWorkspace {
     /// The kept shapes, oldest first.
     kept: Vec<(PrunedInverse, PolyphaseSum)>,
 }
 
-impl Workspace {
+impl TransformWorkspace {
     /// Runs `f` with the transform of the shape (M, lines) and a sum of `components` series of
     /// `count` points, zeroed, that its rows add to.
     pub(super) fn with<T>(
@@ -241,7 +241,7 @@ mod tests {
         let phases: Vec<Bin> = (0..lines).map(|l| Bin::from_polar(1.0, 0.7 * l as f32 + 0.3)).collect();
         let amplitudes: Vec<f32> = (0..lines).map(|l| 1.0 / (1.0 + l as f32)).collect();
         let angle = 0.013;
-        let series = Workspace::default().with(len, lines, 1, count, |transform, sum| {
+        let series = TransformWorkspace::default().with(len, lines, 1, count, |transform, sum| {
             assert_eq!(transform.rows, 5);
             transform.set_phases(&phases);
             sum.set_modulation(angle);
