@@ -18,7 +18,7 @@ pub mod count;
 pub mod dynamics;
 pub mod error;
 mod linalg;
-mod optimise;
+pub mod optimise;
 pub mod progress;
 #[cfg(feature = "service")]
 pub mod service;

@@ -1,7 +1,8 @@
 //! Local minimisation of a smooth function of a few variables, for the refinement of NARX
 //! coefficients on the simulation error: Nelder-Mead (derivative-free, the paper's choice) and
-//! Levenberg-Marquardt (for least squares whose normal equations the caller can form). Both check
-//! `cancel` once per iteration.
+//! Levenberg-Marquardt (for least squares whose normal equations the caller can form). Both ask
+//! the observer to stop once per iteration, and both say where they ended and why ([`Minimum`]),
+//! so that a calibration can report a refinement that hit its cap.
 //!
 //! Hand-written: the crates that offer them (argmin, levenberg-marquardt) bring their own matrix
 //! and problem abstractions for what is here a few dozen lines over `Vec<f64>`.
@@ -9,6 +10,39 @@
 use crate::error::Result;
 use crate::linalg::{cholesky, cholesky_solve};
 use crate::progress::{Observer, check};
+use serde::{Deserialize, Serialize};
+
+/// Why a minimisation stopped.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum Stop {
+    /// The tolerance was met: a step improved the cost by less than its relative tolerance
+    /// (Levenberg-Marquardt), or the simplex collapsed (Nelder-Mead).
+    Converged,
+    /// The iteration cap came first.
+    IterationCap,
+    /// No step improved the cost although the damping reached its cap (Levenberg-Marquardt): a
+    /// minimum to the precision the cost is computed with.
+    NoImprovingStep,
+    /// The cost is not defined at the start (Levenberg-Marquardt: a free run that diverges); the
+    /// start is returned.
+    UndefinedStart,
+}
+
+/// Where a minimisation ended, what the cost was there, after how many iterations, and why.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Minimum {
+    pub x: Vec<f64>,
+    pub cost: f64,
+    pub iterations: usize,
+    pub stop: Stop,
+}
+
+/// Levenberg-Marquardt's iteration cap.
+pub const LM_MAX_ITERATIONS: usize = 200;
+/// Nelder-Mead's iteration cap per coordinate.
+pub const NM_MAX_ITERATIONS_PER_COORDINATE: usize = 200;
 
 /// The normal equations of a least-squares problem at a point: JᵀJ (row-major, n×n), Jᵀr and the
 /// sum of squared residuals r.
@@ -18,20 +52,25 @@ pub struct NormalEquations {
     pub sum_of_squares: f64,
 }
 
-/// Levenberg-Marquardt from `x`, scaled by diag(JᵀJ) (Marquardt's variant): at most 200
-/// iterations, stopping when a step improves the sum of squares by less than 10⁻¹⁰ relative or the
-/// damping passes 10¹². `normal_equations` returns None where the function is not defined (the
-/// step is then refused). Returns `x` itself if it is not defined there.
+/// Levenberg-Marquardt from `x`, scaled by diag(JᵀJ) (Marquardt's variant): at most
+/// [`LM_MAX_ITERATIONS`] iterations, stopping when a step improves the sum of squares by less than
+/// 10⁻¹⁰ relative or the damping passes 10¹². `normal_equations` returns None where the function is
+/// not defined (the step is then refused). The cost reported is the sum of squares.
 pub fn levenberg_marquardt(
     x: Vec<f64>,
     normal_equations: impl Fn(&[f64]) -> Option<NormalEquations>,
     observer: &dyn Observer,
-) -> Result<Vec<f64>> {
+) -> Result<Minimum> {
     let n = x.len();
     let mut x = x;
-    let Some(mut current) = normal_equations(&x) else { return Ok(x) };
+    let Some(mut current) = normal_equations(&x) else {
+        return Ok(Minimum { x, cost: f64::INFINITY, iterations: 0, stop: Stop::UndefinedStart });
+    };
     let mut lambda = 1e-3;
-    for _ in 0..200 {
+    let mut stop = Stop::IterationCap;
+    let mut iterations = 0;
+    while iterations < LM_MAX_ITERATIONS {
+        iterations += 1;
         check(observer)?;
         let NormalEquations { jtj, jtr, sum_of_squares } = &current;
         let mut a = jtj.clone();
@@ -52,24 +91,27 @@ pub fn levenberg_marquardt(
                 current = next;
                 lambda = (lambda / 3.0).max(1e-12);
                 if improvement < 1e-10 {
+                    stop = Stop::Converged;
                     break;
                 }
             }
             _ => {
                 lambda *= 4.0;
                 if lambda > 1e12 {
+                    stop = Stop::NoImprovingStep;
                     break;
                 }
             }
         }
     }
-    Ok(x)
+    Ok(Minimum { x, cost: current.sum_of_squares, iterations, stop })
 }
 
 /// Nelder-Mead from `x` (reflection 1, expansion 2, contraction ½, shrink ½; MATLAB's fminsearch
 /// start simplex x + 5 % per coordinate), stopping when the simplex has collapsed to relative
-/// 10⁻¹⁰ in both coordinates and values, or after 200·n iterations.
-pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, observer: &dyn Observer) -> Result<Vec<f64>> {
+/// 10⁻¹⁰ in both coordinates and values, or after [`NM_MAX_ITERATIONS_PER_COORDINATE`]·n
+/// iterations.
+pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, observer: &dyn Observer) -> Result<Minimum> {
     let n = x.len();
     let mut simplex: Vec<(Vec<f64>, f64)> = Vec::with_capacity(n + 1);
     simplex.push((x.clone(), f(&x)));
@@ -83,7 +125,10 @@ pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, observer: &dyn Observ
         (0..n).map(|j| s[..n].iter().map(|(x, _)| x[j]).sum::<f64>() / n as f64).collect()
     };
     let along = |c: &[f64], x: &[f64], t: f64| -> Vec<f64> { c.iter().zip(x).map(|(c, x)| c + t * (x - c)).collect() };
-    for _ in 0..200 * n {
+    let mut stop = Stop::IterationCap;
+    let mut iterations = 0;
+    while iterations < NM_MAX_ITERATIONS_PER_COORDINATE * n {
+        iterations += 1;
         check(observer)?;
         simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
         let best = simplex[0].1;
@@ -93,6 +138,7 @@ pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, observer: &dyn Observ
             .flat_map(|s| s.0.iter().zip(&simplex[0].0).map(|(a, b)| (a - b).abs() / b.abs().max(1e-12)))
             .fold(0.0, f64::max);
         if spread_f <= 1e-10 * best.abs().max(1e-300) && spread_x <= 1e-10 {
+            stop = Stop::Converged;
             break;
         }
         let c = centroid(&simplex);
@@ -120,7 +166,8 @@ pub fn nelder_mead(x: Vec<f64>, f: impl Fn(&[f64]) -> f64, observer: &dyn Observ
         }
     }
     simplex.sort_by(|a, b| a.1.total_cmp(&b.1));
-    Ok(simplex.swap_remove(0).0)
+    let (x, cost) = simplex.swap_remove(0);
+    Ok(Minimum { x, cost, iterations, stop })
 }
 
 #[cfg(test)]
@@ -132,8 +179,15 @@ mod tests {
     #[test]
     fn nelder_mead_finds_the_rosenbrock_minimum() {
         let rosenbrock = |x: &[f64]| (1.0 - x[0]).powi(2) + 100.0 * (x[1] - x[0] * x[0]).powi(2);
-        let x = nelder_mead(vec![-1.2, 1.0], rosenbrock, &Silent).unwrap();
+        let minimum = nelder_mead(vec![-1.2, 1.0], rosenbrock, &Silent).unwrap();
+        let x = &minimum.x;
         assert!((x[0] - 1.0).abs() < 1e-4 && (x[1] - 1.0).abs() < 1e-4, "{x:?}");
+        assert_eq!(minimum.stop, Stop::Converged);
+        assert!(minimum.cost < 1e-8 && minimum.cost == rosenbrock(x), "{minimum:?}");
+        assert!(minimum.iterations > 10 && minimum.iterations < NM_MAX_ITERATIONS_PER_COORDINATE * 2);
+        // On a function without a minimum the cap comes first, and it says so.
+        let capped = nelder_mead(vec![-1.2, 1.0], |x: &[f64]| x[0].sin() * 1e-300 + x[1], &Silent).unwrap();
+        assert_eq!((capped.stop, capped.iterations), (Stop::IterationCap, NM_MAX_ITERATIONS_PER_COORDINATE * 2));
     }
 
     /// The exponential fit y = a·e^{b t} to exact data returns (a, b) = (2, −0.5).
@@ -157,7 +211,12 @@ mod tests {
             }
             Some(NormalEquations { jtj, jtr, sum_of_squares })
         };
-        let x = levenberg_marquardt(vec![1.0, 0.0], normal_equations, &Silent).unwrap();
+        let minimum = levenberg_marquardt(vec![1.0, 0.0], normal_equations, &Silent).unwrap();
+        let x = &minimum.x;
         assert!((x[0] - 2.0).abs() < 1e-8 && (x[1] + 0.5).abs() < 1e-8, "{x:?}");
+        assert!(minimum.cost < 1e-20 && minimum.iterations < 100, "{minimum:?}");
+        assert!(matches!(minimum.stop, Stop::Converged | Stop::NoImprovingStep), "{minimum:?}");
+        let undefined = levenberg_marquardt(vec![1.0, 0.0], |_: &[f64]| None, &Silent).unwrap();
+        assert_eq!((undefined.stop, undefined.iterations, undefined.x), (Stop::UndefinedStart, 0, vec![1.0, 0.0]));
     }
 }

@@ -2,8 +2,9 @@
 //! storm's phases random, and per threshold the lognormal fragility P = Φ(ln(v/θ)/β) that
 //! engineers tabulate, fitted by maximum likelihood on the binomial counts (Baker 2015).
 
-use super::exceedance::{check_confidence, check_samples, clopper_pearson};
+use super::exceedance::{check_confidence, clopper_pearson};
 use super::hazard::WIND_SPEED;
+use super::sampling::check_samples;
 use super::{Draws, OnDivergence, Response, check_thresholds, peaks_at};
 use crate::error::{Error, Result};
 use crate::optimise::nelder_mead;
@@ -178,7 +179,7 @@ fn fit_lognormal(speeds: &[f64], counts: &[usize], n: usize, confidence: f64) ->
         .enumerate()
         .min_by(|a, b| (*a.1 as f64 - n as f64 / 2.0).abs().total_cmp(&(*b.1 as f64 - n as f64 / 2.0).abs()))
         .map_or(0, |(j, _)| j);
-    let best = nelder_mead(vec![speeds[nearest].ln(), 0.3f64.ln()], nll, &Silent).ok()?;
+    let best = nelder_mead(vec![speeds[nearest].ln(), 0.3f64.ln()], nll, &Silent).ok()?.x;
     let (a, b) = (best[0], best[1]);
     if !(a.is_finite() && b.is_finite()) {
         return None;

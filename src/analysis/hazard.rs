@@ -2,7 +2,8 @@
 //! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
 //! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
 
-use super::exceedance::{Draws, OnDivergence, automatic_thresholds, check_confidence, check_samples, peaks_at};
+use super::exceedance::{automatic_thresholds, check_confidence};
+use super::sampling::{Draws, OnDivergence, check_samples, peaks_at};
 use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
 use super::{Response, check_thresholds};
 use crate::error::{Error, Result};

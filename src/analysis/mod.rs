@@ -12,6 +12,7 @@ mod plot;
 mod profile;
 mod reference;
 mod response;
+mod sampling;
 mod sobol;
 mod strata;
 mod validated_responses;
@@ -19,8 +20,8 @@ mod validation;
 
 pub use climate::{ClimateCoverage, ClimateSpec};
 pub use exceedance::{
-    Draws, ExceedanceCurve, MAX_SAMPLES, MAX_THRESHOLD, MAX_THRESHOLDS, OnDivergence, automatic_thresholds,
-    check_confidence, check_samples, check_thresholds, exceedance_curve, max_exceedance_gap, metamodel_peaks, peaks_at,
+    ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,
+    exceedance_curve, max_exceedance_gap,
 };
 pub use fragility::{
     Fragility, FragilityCurve, FragilityOptions, LognormalFragility, MAX_WIND_SPEEDS, fragility, metamodel_fragility,
@@ -34,6 +35,7 @@ pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validatio
 pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
 pub use reference::{reference_history, reference_peak};
 pub use response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_GRAVITY};
+pub use sampling::{Draws, MAX_SAMPLES, OnDivergence, check_samples, metamodel_peaks, peaks_at};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;
 pub use validated_responses::ResponseValidation;

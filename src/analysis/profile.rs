@@ -2,8 +2,9 @@
 //! in one pass over the storms (every floor's peak from the same runs), and the profile of a
 //! quantile of those peaks with a distribution-free confidence band.
 
-use super::exceedance::{Draws, OnDivergence, check_confidence, check_samples, peak_sets_at};
+use super::exceedance::check_confidence;
 use super::peaks::quantile;
+use super::sampling::{Draws, OnDivergence, check_samples, peak_sets_at};
 use super::{Response, ResponseKind};
 use crate::error::{Error, Result};
 use crate::progress::Observer;

@@ -136,6 +136,18 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
             d.coefficient_loo_errors.iter().fold(0.0f64, |m, v| m.max(*v)),
             if d.diverged_experiments > 0 { format!(", {} diverged", d.diverged_experiments) } else { String::new() }
         );
+        let r = &d.refinement;
+        if options.refinement != Refinement::None {
+            out += &format!(
+                "  refinement: {} converged, {} at the iteration cap, {} without an improving step, {} from a diverging start; iterations median {}, max {}\n",
+                r.converged,
+                r.iteration_cap,
+                r.no_improving_step,
+                r.undefined_start,
+                r.median_iterations,
+                r.max_iterations
+            );
+        }
     }
     out += &format!(
         "mean over modes: NARX {:.2e}, PC-NARX {:.2e}\nmetamodel written to {}\n",

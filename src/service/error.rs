@@ -59,9 +59,35 @@ impl From<crate::error::Error> for ApiError {
     }
 }
 
+/// How long a client should wait before asking again while the database does not answer (s).
+const DATABASE_RETRY_S: u64 = 2;
+
 impl From<sqlx::Error> for ApiError {
+    /// A database that cannot be reached now (restarting, unreachable, locked) is 503 with
+    /// `Retry-After`, since the same request will succeed once it answers; any other database
+    /// error is the server's failure.
     fn from(error: sqlx::Error) -> Self {
+        if database_unreachable(&error) {
+            tracing::warn!(%error, "the database does not answer");
+            return ApiError::unavailable("the database does not answer now; try again shortly", DATABASE_RETRY_S);
+        }
         ApiError::internal(error)
+    }
+}
+
+/// Errors of reaching the database rather than of the statement: a refused, broken or timed-out
+/// connection, a pool with none to give, PostgreSQL's connection exceptions (class 08) and its
+/// shutdown and start-up (57P01-57P03), SQLite's file busy or locked past its busy timeout.
+fn database_unreachable(error: &sqlx::Error) -> bool {
+    match error {
+        sqlx::Error::Io(_) | sqlx::Error::Tls(_) | sqlx::Error::PoolTimedOut | sqlx::Error::PoolClosed => true,
+        sqlx::Error::WorkerCrashed => true,
+        sqlx::Error::Database(error) => match error.code().as_deref() {
+            Some(code) if code.starts_with("08") || ["57P01", "57P02", "57P03"].contains(&code) => true,
+            Some(code) => code.parse::<i32>().is_ok_and(|sqlite| matches!(sqlite & 0xff, 5 | 6)),
+            None => false,
+        },
+        _ => false,
     }
 }
 

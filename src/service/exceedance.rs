@@ -10,7 +10,7 @@ use crate::analysis::{
     check_thresholds, exceedance_curve, metamodel_peaks, metamodel_profiles,
 };
 use crate::error::{Error, Result, require_finite};
-use crate::progress::{Observer, Progress};
+use crate::progress::Observer;
 use crate::structure::MAX_FLOORS;
 use crate::study::Study;
 use crate::surrogate::Metamodel;
@@ -18,8 +18,6 @@ use crate::uncertainty::InputModel;
 use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
-use std::sync::Arc;
-use std::sync::atomic::{AtomicBool, Ordering};
 use utoipa::ToSchema;
 
 /// `POST /v1/metamodels/{id}/exceedance`: every field optional.
@@ -206,41 +204,6 @@ impl Rendering {
                 ("image/svg+xml", exceedance_svg(&[("PC-NARX", curve)], &label))
             }
         }
-    }
-}
-
-/// What stops a synchronous request's sampling: the client went away or the request timed out
-/// (`stop`), or the server is shutting down (`draining`). The sampling checks it between batches
-/// of a few storms, about every millisecond.
-pub struct RequestWatch {
-    stop: AtomicBool,
-    draining: Arc<AtomicBool>,
-}
-
-impl RequestWatch {
-    pub fn new(draining: Arc<AtomicBool>) -> Self {
-        RequestWatch { stop: AtomicBool::new(false), draining }
-    }
-
-    pub fn stop(&self) {
-        self.stop.store(true, Ordering::Relaxed);
-    }
-}
-
-impl Observer for RequestWatch {
-    fn progress(&self, _: Progress) {}
-    fn cancelled(&self) -> bool {
-        self.stop.load(Ordering::Relaxed) || self.draining.load(Ordering::Relaxed)
-    }
-}
-
-/// Stops the watched work when dropped: axum drops a handler's future when its client
-/// disconnects, and with it this guard.
-pub struct StopOnDrop(pub Arc<RequestWatch>);
-
-impl Drop for StopOnDrop {
-    fn drop(&mut self) {
-        self.0.stop();
     }
 }
 

@@ -25,6 +25,7 @@ use std::pin::Pin;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
+use tracing::Instrument;
 
 /// Experiments per task: large enough that a task's overhead (rebuilding the study, a lease) is
 /// small against its work, small enough that a full-size calibration has tasks for every replica.
@@ -74,14 +75,18 @@ async fn worker(state: AppState) {
     while !state.draining.load(Ordering::Relaxed) {
         let claimed = match state.store.claim_task(&owner, state.config.lease_ms, None).await {
             Ok(Some(task)) => {
-                run_task(&state, &owner, task, None).await;
+                let span = tracing::info_span!("task", job = %task.job_id, chunk = task.chunk);
+                run_task(&state, &owner, task, None).instrument(span).await;
                 continue;
             }
             Ok(None) => state.store.claim(&owner, state.config.lease_ms).await,
             Err(error) => Err(error),
         };
         match claimed {
-            Ok(Some(job)) => run(&state, &owner, job.id, &job.kind, job.request).await,
+            Ok(Some(job)) => {
+                let span = tracing::info_span!("job", id = %job.id, kind = %job.kind);
+                run(&state, &owner, job.id, &job.kind, job.request).instrument(span).await
+            }
             Ok(None) => {
                 tokio::select! {
                     _ = state.wake.notified() => {}
@@ -112,7 +117,9 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
     let supervision = Arc::new(Supervision::default());
     let observer = supervision.clone();
     let config = state.config.clone();
+    let span = tracing::Span::current();
     let mut work = tokio::task::spawn_blocking(move || -> Result<Vec<ExperimentFit>> {
+        let _in_task = span.enter();
         let request: TaskRequest =
             serde_json::from_str(&task.request).map_err(|e| Error::invalid("task", e.to_string()))?;
         let (study, options) = request.calibration.resolve(&config)?;
@@ -131,7 +138,7 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
                         // The task was withdrawn (its job cancelled) or taken by another worker.
                         Ok(_) => stop = true,
                         Err(error) => {
-                            tracing::warn!(%error, job = %job_id, chunk, "renewing a task's lease failed");
+                            tracing::warn!(%error, "renewing a task's lease failed");
                             stop |= !lease.failed();
                         }
                     }
@@ -156,7 +163,7 @@ async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&
         None => lease.persist("releasing a task", || store.release_task(&job_id, chunk, owner)).await,
     };
     if let Err(error) = recorded {
-        tracing::error!(%error, job = %job_id, chunk, "recording a task failed");
+        tracing::error!(%error, "recording a task failed");
     }
 }
 
@@ -175,9 +182,12 @@ enum JobOutput {
 
 type WorkFuture = Pin<Box<dyn Future<Output = Result<(JobOutput, String)>> + Send>>;
 
-/// A blocking computation as a future; a panic becomes an error.
+/// A blocking computation as a future, in the caller's span (its job); a panic becomes an error.
 async fn blocking<T: Send + 'static>(work: impl FnOnce() -> Result<T> + Send + 'static) -> Result<T> {
-    tokio::task::spawn_blocking(work).await.map_err(|panic| Error::Internal(format!("the job panicked: {panic}")))?
+    let span = tracing::Span::current();
+    tokio::task::spawn_blocking(move || span.in_scope(work))
+        .await
+        .map_err(|panic| Error::Internal(format!("the job panicked: {panic}")))?
 }
 
 /// A stored metamodel and its study, for jobs that sample it.
@@ -319,7 +329,10 @@ async fn coordinate(
             store.claim_task(&owner, state.config.lease_ms, Some(&id))
         });
         match claimed.await? {
-            Some(task) => run_task(&state, &owner, task, Some(&supervision)).await,
+            Some(task) => {
+                let span = tracing::info_span!("task", chunk = task.chunk);
+                run_task(&state, &owner, task, Some(&supervision)).instrument(span).await
+            }
             None => tokio::time::sleep(Duration::from_millis(250)).await,
         }
     }
@@ -346,7 +359,7 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
             return;
         }
     };
-    tracing::info!(job = %id, kind, "job started");
+    tracing::info!("job started");
     let mut ticker = tokio::time::interval(Duration::from_secs(1));
     let result = loop {
         tokio::select! {
@@ -365,7 +378,7 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
                         }
                         Ok(None) => supervision.cancel.store(true, Ordering::Relaxed), // lease lost: stop, discard
                         Err(error) => {
-                            tracing::warn!(%error, job = %id, "renewing a job's lease failed");
+                            tracing::warn!(%error, "renewing a job's lease failed");
                             if !lease.failed() {
                                 supervision.cancel.store(true, Ordering::Relaxed);
                             }
@@ -399,12 +412,12 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
         }
     };
     if let Err(error) = outcome {
-        tracing::error!(%error, job = %id, "recording the outcome failed");
+        tracing::error!(%error, "recording the outcome failed");
     }
     let state_name = match state.store.job(&id).await {
         Ok(Some(row)) => row.state,
         _ => "unknown".into(),
     };
+    tracing::info!(state = %state_name, "job ended");
     metrics::counter!("windmeta_jobs_total", "kind" => kind.to_string(), "outcome" => state_name).increment(1);
-    tracing::info!(job = %id, "job ended");
 }

@@ -165,30 +165,37 @@ mod x86 {
         type Isa = Avx512Isa;
         #[inline(always)]
         fn splat(_: Avx512Isa, x: f64) -> Self {
+            // SAFETY: an `Avx512` exists only where AVX-512F and FMA were detected.
             Avx512(unsafe { _mm512_set1_pd(x) })
         }
         #[inline(always)]
         fn load(_: Avx512Isa, x: &Lanes) -> Self {
+            // SAFETY: an `Avx512` exists only where AVX-512F and FMA were detected.
             Avx512(unsafe { _mm512_loadu_pd(x.as_ptr()) })
         }
         #[inline(always)]
         fn store(self, to: &mut Lanes) {
+            // SAFETY: an `Avx512` exists only where AVX-512F and FMA were detected.
             unsafe { _mm512_storeu_pd(to.as_mut_ptr(), self.0) }
         }
         #[inline(always)]
         fn mul_add(self, b: Self, c: Self) -> Self {
+            // SAFETY: an `Avx512` exists only where AVX-512F and FMA were detected.
             Avx512(unsafe { _mm512_fmadd_pd(self.0, b.0, c.0) })
         }
         #[inline(always)]
         fn mul(self, b: Self) -> Self {
+            // SAFETY: an `Avx512` exists only where AVX-512F and FMA were detected.
             Avx512(unsafe { _mm512_mul_pd(self.0, b.0) })
         }
         #[inline(always)]
         fn abs(self) -> Self {
+            // SAFETY: an `Avx512` exists only where AVX-512F and FMA were detected.
             Avx512(unsafe { _mm512_abs_pd(self.0) })
         }
         #[inline(always)]
         fn max(self, b: Self) -> Self {
+            // SAFETY: an `Avx512` exists only where AVX-512F and FMA were detected.
             Avx512(unsafe { _mm512_max_pd(self.0, b.0) })
         }
     }
@@ -203,14 +210,17 @@ mod x86 {
         type Isa = Avx2Isa;
         #[inline(always)]
         fn splat(_: Avx2Isa, x: f64) -> Self {
+            // SAFETY: an `Avx2` exists only where AVX2 and FMA were detected.
             unsafe { Avx2(_mm256_set1_pd(x), _mm256_set1_pd(x)) }
         }
         #[inline(always)]
         fn load(_: Avx2Isa, x: &Lanes) -> Self {
+            // SAFETY: an `Avx2` exists only where AVX2 and FMA were detected.
             unsafe { Avx2(_mm256_loadu_pd(x.as_ptr()), _mm256_loadu_pd(x.as_ptr().add(4))) }
         }
         #[inline(always)]
         fn store(self, to: &mut Lanes) {
+            // SAFETY: an `Avx2` exists only where AVX2 and FMA were detected.
             unsafe {
                 _mm256_storeu_pd(to.as_mut_ptr(), self.0);
                 _mm256_storeu_pd(to.as_mut_ptr().add(4), self.1);
@@ -218,14 +228,17 @@ mod x86 {
         }
         #[inline(always)]
         fn mul_add(self, b: Self, c: Self) -> Self {
+            // SAFETY: an `Avx2` exists only where AVX2 and FMA were detected.
             unsafe { Avx2(_mm256_fmadd_pd(self.0, b.0, c.0), _mm256_fmadd_pd(self.1, b.1, c.1)) }
         }
         #[inline(always)]
         fn mul(self, b: Self) -> Self {
+            // SAFETY: an `Avx2` exists only where AVX2 and FMA were detected.
             unsafe { Avx2(_mm256_mul_pd(self.0, b.0), _mm256_mul_pd(self.1, b.1)) }
         }
         #[inline(always)]
         fn abs(self) -> Self {
+            // SAFETY: an `Avx2` exists only where AVX2 and FMA were detected.
             unsafe {
                 let sign = _mm256_set1_pd(-0.0);
                 Avx2(_mm256_andnot_pd(sign, self.0), _mm256_andnot_pd(sign, self.1))
@@ -233,6 +246,7 @@ mod x86 {
         }
         #[inline(always)]
         fn max(self, b: Self) -> Self {
+            // SAFETY: an `Avx2` exists only where AVX2 and FMA were detected.
             unsafe { Avx2(_mm256_max_pd(self.0, b.0), _mm256_max_pd(self.1, b.1)) }
         }
     }

@@ -124,7 +124,7 @@ pub fn least_squares(terms: &[NarxTerm], record: &Record) -> Result<Vec<f64>> {
 
 /// A record's one-step regression over a whole dictionary, compressed to the triangular factor R of
 /// the QR of [X | y]. Since X = Q R₁ and y = Q z + r with r orthogonal to every column, the least
-/// squares of any subset S of the dictionary is the small study min ‖R_S θ − z‖ on the columns S
+/// squares of any subset S of the dictionary is the small problem min ‖R_S θ − z‖ on the columns S
 /// of R: the same solution as on the whole record, at O(p³) per candidate instead of O(n p²).
 pub struct CompressedRegression {
     terms: Vec<NarxTerm>,

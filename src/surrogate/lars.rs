@@ -98,7 +98,7 @@ mod tests {
         coefs: Vec<Vec<f64>>,
     }
 
-    /// The path of scikit-learn's `lars_path(X, y, method="lar")` on a random study
+    /// The path of scikit-learn's `lars_path(X, y, method="lar")` on a random problem
     /// (tests/fixtures/generate.py): the same order of entry and the same coefficients at every step.
     #[test]
     fn matches_scikit_learn() {

@@ -5,6 +5,7 @@ use super::Parametrization;
 use super::narx::NarxTerm;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
+use super::refine::RefinementSummary;
 use crate::error::{Error, Result};
 use crate::study::{Study, StudySpec};
 use serde::{Deserialize, Serialize};
@@ -85,6 +86,9 @@ pub struct ModeDiagnostics {
     pub coefficient_pce_terms: Vec<usize>,
     /// Experiments whose free run diverged; their error is infinite, so the means above show it.
     pub diverged_experiments: usize,
+    /// How the refinements of the experiments' coefficients on the simulation error ended.
+    #[serde(default)]
+    pub refinement: RefinementSummary,
 }
 
 /// How the metamodel came about and how well it fits its own experiments.

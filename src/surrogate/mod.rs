@@ -25,4 +25,4 @@ pub use metamodel::{
 };
 pub use options::{CalibrationOptions, MAX_EXPERIMENTS, WindCoverage};
 pub use parametrization::Parametrization;
-pub use refine::Refinement;
+pub use refine::{Refinement, RefinementOutcome, RefinementSummary};

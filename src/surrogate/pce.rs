@@ -249,7 +249,7 @@ impl SparsePce {
         }
         let families: Vec<StandardSpace> = model.inputs.iter().map(|i| i.marginal.standard_space()).collect();
         let active: Vec<usize> = (0..families.len()).filter(|&i| families[i] != StandardSpace::Fixed).collect();
-        // Rows scaled by √w turn the weighted study into an ordinary one; weights of mean 1 keep
+        // Rows scaled by √w turn the weighted problem into an ordinary one; weights of mean 1 keep
         // the corrected LOO error a mean over the experiments.
         let mean_weight = weights.iter().sum::<f64>() / n as f64;
         let row_scales: Vec<f64> = weights.iter().map(|w| (w / mean_weight).sqrt()).collect();

@@ -21,7 +21,7 @@ use super::metamodel::{
 use super::narx::relative_error;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
-use super::refine::refine;
+use super::refine::{RefinementOutcome, RefinementSummary, refine};
 use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, check};
@@ -66,6 +66,9 @@ pub struct ExperimentFit {
     pub coefficients: Vec<Vec<f64>>,
     /// Per mode: free-run relative error with these coefficients (infinite if it diverged).
     pub narx_errors: Vec<f64>,
+    /// Per mode: how the refinement on the simulation error ended (None: not refined).
+    #[serde(default)]
+    pub refinements: Vec<Option<RefinementOutcome>>,
 }
 
 /// One experiment's histories for every mode: modal forces and reference modal displacements.
@@ -130,14 +133,16 @@ impl Experiment {
             static_displacement: self.y.iter().map(|y| y[0]).collect(),
             coefficients: Vec::new(),
             narx_errors: Vec::new(),
+            refinements: Vec::new(),
         };
         for (record, structure) in self.records(&plan.scales, coupled).iter().zip(&plan.structures) {
             let start = least_squares(&structure.terms, record)?;
-            let theta = refine(options.refinement, &structure.terms, start, record, observer)?;
+            let (theta, refinement) = refine(options.refinement, &structure.terms, start, record, observer)?;
             let error = simulate(&structure.terms, &theta, record)
                 .map_or(f64::INFINITY, |y_hat| relative_error(&record.y, &y_hat));
             fit.coefficients.push(theta);
             fit.narx_errors.push(error);
+            fit.refinements.push(refinement);
         }
         Ok(fit)
     }
@@ -335,6 +340,9 @@ pub fn assemble(
             coefficient_loo_errors: expansions.iter().map(|p| p.loo_error).collect(),
             coefficient_pce_terms: expansions.iter().map(|p| p.terms.len()).collect(),
             diverged_experiments: diverged,
+            refinement: RefinementSummary::of(
+                &fits.iter().filter_map(|f| f.refinements.get(mode).copied().flatten()).collect::<Vec<_>>(),
+            ),
         });
         models.push(ModeModel {
             term_names: terms.iter().map(|t| t.to_string()).collect(),

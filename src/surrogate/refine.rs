@@ -5,7 +5,7 @@
 use super::identify::{Record, simulate};
 use super::narx::{NarxTerm, diverged, rest_output};
 use crate::error::Result;
-use crate::optimise::{NormalEquations, levenberg_marquardt, nelder_mead};
+use crate::optimise::{Minimum, NormalEquations, Stop, levenberg_marquardt, nelder_mead};
 use crate::progress::Observer;
 use serde::{Deserialize, Serialize};
 
@@ -22,22 +22,73 @@ pub enum Refinement {
     None,
 }
 
+/// How one experiment's refinement ended.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+pub struct RefinementOutcome {
+    pub stop: Stop,
+    pub iterations: usize,
+}
+
+/// How the refinements of one mode's experiments ended: how many stopped for each reason, and
+/// their iterations (all zero when the coefficients are not refined).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct RefinementSummary {
+    /// Met the optimiser's tolerance.
+    pub converged: usize,
+    /// Stopped at the iteration cap: the coefficients may be short of the optimum.
+    pub iteration_cap: usize,
+    /// Levenberg-Marquardt found no improving step at its largest damping: an optimum to the
+    /// precision of the free run.
+    pub no_improving_step: usize,
+    /// The one-step fit's free run diverged, so the refinement could not start from it.
+    pub undefined_start: usize,
+    pub median_iterations: f64,
+    pub max_iterations: usize,
+}
+
+impl RefinementSummary {
+    pub fn of(outcomes: &[RefinementOutcome]) -> Self {
+        let mut summary = RefinementSummary::default();
+        for outcome in outcomes {
+            *match outcome.stop {
+                Stop::Converged => &mut summary.converged,
+                Stop::IterationCap => &mut summary.iteration_cap,
+                Stop::NoImprovingStep => &mut summary.no_improving_step,
+                Stop::UndefinedStart => &mut summary.undefined_start,
+            } += 1;
+        }
+        let mut iterations: Vec<usize> = outcomes.iter().map(|o| o.iterations).collect();
+        iterations.sort_unstable();
+        summary.max_iterations = iterations.last().copied().unwrap_or(0);
+        summary.median_iterations = match iterations.len() {
+            0 => 0.0,
+            n if n % 2 == 1 => iterations[n / 2] as f64,
+            n => (iterations[n / 2 - 1] + iterations[n / 2]) as f64 / 2.0,
+        };
+        summary
+    }
+}
+
 /// Refines `theta` on the sum of squared free-run errors over the record; each iteration (one
-/// free run of the record) checks `cancel`.
+/// free run of the record) asks the observer whether to stop. Returns the coefficients and, when
+/// they were refined, how the refinement ended.
 pub fn refine(
     method: Refinement,
     terms: &[NarxTerm],
     theta: Vec<f64>,
     record: &Record,
     observer: &dyn Observer,
-) -> Result<Vec<f64>> {
-    match method {
+) -> Result<(Vec<f64>, Option<RefinementOutcome>)> {
+    let minimum = match method {
         Refinement::LevenbergMarquardt => {
-            levenberg_marquardt(theta, |theta| normal_equations(terms, theta, record), observer)
+            levenberg_marquardt(theta, |theta| normal_equations(terms, theta, record), observer)?
         }
-        Refinement::NelderMead => nelder_mead(theta, |theta| sum_of_squares(terms, theta, record), observer),
-        Refinement::None => Ok(theta),
-    }
+        Refinement::NelderMead => nelder_mead(theta, |theta| sum_of_squares(terms, theta, record), observer)?,
+        Refinement::None => return Ok((theta, None)),
+    };
+    let Minimum { x, stop, iterations, .. } = minimum;
+    Ok((x, Some(RefinementOutcome { stop, iterations })))
 }
 
 fn sum_of_squares(terms: &[NarxTerm], theta: &[f64], record: &Record) -> f64 {
@@ -137,9 +188,28 @@ mod tests {
         let start: Vec<f64> = theta.iter().map(|v| v * 1.01).collect();
         assert!(simulation_error(&terms, &start, &data) > 1e-3);
         for method in [Refinement::LevenbergMarquardt, Refinement::NelderMead] {
-            let refined = refine(method, &terms, start.clone(), &data, &Silent).unwrap();
+            let (refined, outcome) = refine(method, &terms, start.clone(), &data, &Silent).unwrap();
             let error = simulation_error(&terms, &refined, &data);
             assert!(error < 1e-8, "{method:?}: error {error}, θ = {refined:?}");
+            let outcome = outcome.expect("refined");
+            assert!(outcome.stop != Stop::IterationCap && outcome.stop != Stop::UndefinedStart, "{outcome:?}");
+            assert!(outcome.iterations > 0);
         }
+        assert_eq!(refine(Refinement::None, &terms, start.clone(), &data, &Silent).unwrap(), (start, None));
+    }
+
+    /// The summary counts each stop reason and takes the median and largest iteration counts.
+    #[test]
+    fn summary_counts_the_stops() {
+        let outcome = |stop, iterations| RefinementOutcome { stop, iterations };
+        let summary = RefinementSummary::of(&[
+            outcome(Stop::Converged, 4),
+            outcome(Stop::IterationCap, 200),
+            outcome(Stop::Converged, 6),
+            outcome(Stop::NoImprovingStep, 9),
+        ]);
+        assert_eq!((summary.converged, summary.iteration_cap, summary.no_improving_step), (2, 1, 1));
+        assert_eq!((summary.undefined_start, summary.median_iterations, summary.max_iterations), (0, 7.5, 200));
+        assert_eq!(RefinementSummary::of(&[]), RefinementSummary::default());
     }
 }

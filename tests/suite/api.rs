@@ -5,6 +5,8 @@ use crate::harness::app::{
     TestApp, assert_problem, database, problem_details, spawn_app, spawn_app_configured, spawn_app_with,
 };
 use crate::harness::fixture;
+use crate::harness::postgres::fresh_postgres;
+use crate::harness::proxy::Proxy;
 use serde_json::{Value, json};
 use std::time::{Duration, Instant};
 use windmeta::progress::Silent;
@@ -523,10 +525,18 @@ fn keys(value: &Value) -> Vec<String> {
 enum Phase {
     Normal,
     QueueFull,
+    /// The database answers with errors (its tables renamed away).
     DatabaseBroken,
+    /// The database does not answer at all: provoked on PostgreSQL behind a proxy that is cut
+    /// (`a_database_outage_is_answered_503`).
+    DatabaseDown,
 }
 
-fn phase_of(path: &str, status: u16) -> Phase {
+fn phase_of(spec: &Value, method: &str, path: &str, status: u16) -> Phase {
+    let shared = spec["paths"][path][method.to_lowercase()]["responses"][status.to_string()]["$ref"].as_str();
+    if shared == Some("#/components/responses/DatabaseUnavailable") {
+        return Phase::DatabaseDown;
+    }
     match status {
         500 => Phase::DatabaseBroken,
         503 if path == "/readyz" => Phase::DatabaseBroken,
@@ -591,6 +601,62 @@ async fn provoke(app: &TestApp, ids: &Ids, method: &str, template: &str, status:
         _ => request(""),
     };
     request.send().await.unwrap()
+}
+
+/// Checks an answer against the description: its status, the headers and the media type documented
+/// for that status.
+async fn assert_as_documented(spec: &Value, method: &str, path: &str, status: u16, response: reqwest::Response) {
+    let documented_response = documented_response(spec, method, path, status);
+    for header in keys(&documented_response["headers"]) {
+        assert!(response.headers().contains_key(header.as_str()), "{method} {path} {status}: no {header}");
+    }
+    let got = response.status().as_u16();
+    let media = response.headers().get("content-type").map(|v| v.to_str().unwrap().to_string());
+    let body = response.text().await.unwrap_or_default();
+    assert_eq!(got, status, "{method} {path} answered {got}, not the documented {status}: {body}");
+    let documented_media = keys(&documented_response["content"]);
+    match media {
+        None => assert!(documented_media.is_empty(), "{method} {path} {status}: no content type"),
+        Some(media) => assert!(
+            documented_media.iter().any(|d| media.starts_with(d.as_str())),
+            "{method} {path} {status}: `{media}` is not among {documented_media:?}"
+        ),
+    }
+}
+
+/// While PostgreSQL does not answer (the connection through a proxy cut: every open connection
+/// reset, new ones refused), every route that reads or writes the database answers 503 with
+/// `Retry-After`, as its description says, not 500; once it answers again, so do they.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_database_outage_is_answered_503() {
+    let Some(url) = fresh_postgres().await else { return };
+    let proxy = Proxy::start("127.0.0.1:5432").await;
+    let proxied = url.replacen("127.0.0.1:5432", &format!("127.0.0.1:{}", proxy.port), 1);
+    assert_ne!(proxied, url, "the test database is not at 127.0.0.1:5432: {url}");
+    let app = spawn_app_configured(&database("outage"), |args| {
+        args.database_url = proxied;
+        args.api_keys = vec![KEY.into()];
+    })
+    .await;
+    let (operation, metamodel) = calibrate_over_http(&app, json!({"experiments": 4, "duration_s": 10})).await;
+    let ids = Ids { doomed_metamodel: metamodel.clone(), metamodel, operation: operation.clone() };
+    let spec = serde_json::to_value(windmeta::service::openapi_for(&app.config)).unwrap();
+    let down: Vec<_> = documented_statuses(&spec)
+        .into_iter()
+        .filter(|(m, p, s)| phase_of(&spec, m, p, *s) == Phase::DatabaseDown)
+        .collect();
+    for named in [("GET", "/v1/operations/{id}"), ("GET", "/v1/metamodels"), ("GET", "/v1/metamodels/{id}/study")] {
+        assert!(down.iter().any(|(m, p, _)| (m.as_str(), p.as_str()) == named), "{named:?} not in {down:?}");
+    }
+    proxy.cut();
+    for (method, path, status) in &down {
+        let response = provoke(&app, &ids, method, path, *status).await;
+        assert_as_documented(&spec, method, path, *status, response).await;
+    }
+    proxy.restore();
+    let answer = app.client.get(format!("{}/v1/operations/{operation}", app.address)).bearer_auth(KEY).send().await;
+    assert_eq!(answer.unwrap().status().as_u16(), 200, "the database answers again");
+    app.stop().await;
 }
 
 /// Waits until no operation is queued or running, cancelling what is.
@@ -661,7 +727,8 @@ async fn every_documented_status_is_real() {
     let mut held_stream = None;
     for phase in [Phase::Normal, Phase::QueueFull, Phase::DatabaseBroken] {
         match phase {
-            Phase::Normal => {}
+            // Provoked by `a_database_outage_is_answered_503`.
+            Phase::Normal | Phase::DatabaseDown => {}
             Phase::QueueFull => {
                 drain_operations(&app).await;
                 // One long calibration runs on the single worker, the next waits: the queue is full.
@@ -696,28 +763,13 @@ async fn every_documented_status_is_real() {
                 }
             }
         }
-        let provoked = documented.iter().filter(|(_, p, s)| phase_of(p, *s) == phase);
+        let provoked = documented.iter().filter(|(m, p, s)| phase_of(&spec, m, p, *s) == phase);
         for (method, path, status) in provoked {
             if *status == 202 {
                 drain_operations(&app).await; // the queue holds one job in this test
             }
             let response = provoke(&app, &ids, method, path, *status).await;
-            let documented_response = documented_response(&spec, method, path, *status);
-            for header in keys(&documented_response["headers"]) {
-                assert!(response.headers().contains_key(header.as_str()), "{method} {path} {status}: no {header}");
-            }
-            let got = response.status().as_u16();
-            let media = response.headers().get("content-type").map(|v| v.to_str().unwrap().to_string());
-            let body = response.text().await.unwrap_or_default();
-            assert_eq!(got, *status, "{method} {path} answered {got}, not the documented {status}: {body}");
-            let documented_media = keys(&documented_response["content"]);
-            match media {
-                None => assert!(documented_media.is_empty(), "{method} {path} {status}: no content type"),
-                Some(media) => assert!(
-                    documented_media.iter().any(|d| media.starts_with(d.as_str())),
-                    "{method} {path} {status}: `{media}` is not among {documented_media:?}"
-                ),
-            }
+            assert_as_documented(&spec, method, path, *status, response).await;
         }
     }
     app.stop().await;

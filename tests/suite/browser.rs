@@ -36,19 +36,35 @@ async fn the_page_is_served_with_its_policy_and_caching() {
     let again = client.get(format!("{}/", app.address)).header("If-None-Match", &etag).send().await.unwrap();
     assert_eq!(again.status(), 304);
 
+    // The page names one module and the style sheet; every module names what it imports by its
+    // versioned address, so every asset is reached through versioned addresses only.
     let script = "text/javascript; charset=utf-8";
-    let scripts =
-        ["charts.js", "client.js", "operations.js", "models.js", "analyses.js", "app.js"].map(|name| (name, script));
-    for (asset, content_type) in scripts.into_iter().chain([("style.css", "text/css; charset=utf-8")]) {
-        let start = html.find(&format!("/assets/{asset}?v=")).unwrap_or_else(|| panic!("{asset} is not linked"));
-        let address: String = html[start..].chars().take_while(|c| *c != '"').collect();
+    let mut pending = vec![address_of(&html, "app.js"), address_of(&html, "style.css")];
+    let mut seen = Vec::new();
+    while let Some(address) = pending.pop() {
         let versioned = client.get(format!("{}{address}", app.address)).send().await.unwrap();
-        assert_eq!(versioned.status(), 200);
+        assert_eq!(versioned.status(), 200, "{address}");
+        let content_type = if address.contains(".js?") { script } else { "text/css; charset=utf-8" };
         assert_eq!(header(&versioned, "content-type"), content_type);
         assert_eq!(header(&versioned, "cache-control"), "public, max-age=31536000, immutable");
         assert!(address.ends_with(header(&versioned, "etag").trim_matches('"')), "the address carries the digest");
-        let stale = client.get(format!("{}/assets/{asset}?v=0000", app.address)).send().await.unwrap();
+        let unversioned = address.split('?').next().unwrap().to_string();
+        let stale = client.get(format!("{}{unversioned}?v=0000", app.address)).send().await.unwrap();
         assert_eq!(header(&stale, "cache-control"), "no-cache", "an old address is not kept");
+        let body = versioned.text().await.unwrap();
+        for import in body.lines().filter_map(|line| line.split(" from '").nth(1)) {
+            let target = import.trim_end_matches("';");
+            assert!(target.contains("?v="), "{address} imports {target} without its version");
+            let target = format!("/assets/{}", target.trim_start_matches("./"));
+            if !seen.contains(&target) && !pending.contains(&target) {
+                pending.push(target);
+            }
+        }
+        seen.push(unversioned);
+    }
+    let modules = ["charts.js", "client.js", "operations.js", "analyses.js", "metamodels.js", "app.js"];
+    for name in modules.iter().chain(&["style.css"]) {
+        assert!(seen.contains(&format!("/assets/{name}")), "{name} is not reached from the page: {seen:?}");
     }
     let missing = client.get(format!("{}/assets/other.js", app.address)).send().await.unwrap();
     assert_eq!(missing.status(), 404);
@@ -56,6 +72,12 @@ async fn the_page_is_served_with_its_policy_and_caching() {
     let api = client.get(format!("{}/v1/metamodels", app.address)).send().await.unwrap();
     assert_eq!(api.status(), 401, "the API behind the page still needs the key");
     app.stop().await;
+}
+
+/// The versioned address the page gives an asset.
+fn address_of(html: &str, asset: &str) -> String {
+    let start = html.find(&format!("/assets/{asset}?v=")).unwrap_or_else(|| panic!("{asset} is not linked"));
+    html[start..].chars().take_while(|c| *c != '"').collect()
 }
 
 /// chromedriver and Chromium, from `WINDMETA_CHROMEDRIVER`/`WINDMETA_CHROMIUM` or Debian's paths.

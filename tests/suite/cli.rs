@@ -230,3 +230,30 @@ fn bench_reports_rows_and_headline_figures() {
     assert!(stage("Sobol indices, N = 16") > 0.0);
     refused(&["bench", "--preset", "frame41"], "unknown preset");
 }
+
+/// A binary built for x86-64-v3 refuses a processor without it by name, with exit code 4, before
+/// any of its own code runs (instead of dying of an illegal instruction), and runs on one with it:
+/// the binary under QEMU's user-mode emulation of a Nehalem (SSE4.2, no AVX) and of a Haswell.
+#[test]
+fn an_older_processor_is_refused_by_name() {
+    if !cfg!(target_feature = "avx2") {
+        crate::harness::unavailable("WINDMETA_REQUIRE_QEMU", "this build does not assume x86-64-v3");
+        return;
+    }
+    let qemu = std::path::Path::new("/usr/bin/qemu-x86_64");
+    if !qemu.exists() {
+        crate::harness::unavailable("WINDMETA_REQUIRE_QEMU", "no /usr/bin/qemu-x86_64 (apt install qemu-user)");
+        return;
+    }
+    let on = |cpu: &str| {
+        Command::new(qemu).args(["-cpu", cpu, env!("CARGO_BIN_EXE_windmeta"), "--version"]).output().unwrap()
+    };
+    let old = on("Nehalem");
+    let stderr = String::from_utf8_lossy(&old.stderr);
+    assert_eq!(old.status.code(), Some(4), "{stderr}");
+    assert!(stderr.contains("this processor lacks avx, avx2, fma, f16c, bmi1, bmi2"), "{stderr}");
+    assert!(stderr.contains("x86-64-v3") && stderr.contains("target-cpu=native"), "{stderr}");
+    let new = on("Haswell");
+    assert!(new.status.success(), "{}", String::from_utf8_lossy(&new.stderr));
+    assert!(String::from_utf8_lossy(&new.stdout).starts_with("windmeta "));
+}

@@ -1,9 +1,12 @@
 // The analyses of the chosen metamodel: their shared fields, the exceedance explorer (curves kept
 // for comparison, downloads), the annual curve with return levels, fragility and Sobol indices.
-'use strict';
+import * as Charts from './charts.js';
+import { format } from './charts.js';
+import { $, $$, ApiProblem, UNITS, UNIT_TAGS, api, clearErrors, numberField, session, showProblem } from './client.js';
+import { throughOperation } from './operations.js';
 
 /** Adds the response, floor, group, samples, seed and confidence fields to each analysis form. */
-function setUpAnalysisForms() {
+export function setUpAnalysisForms() {
   for (const form of $$('form.analysis')) {
     const prefix = form.id.replace(/-form$/, '');
     const fields = $('#response-fields').content.cloneNode(true);
@@ -20,7 +23,7 @@ function setUpAnalysisForms() {
 }
 
 /** Bounds of the chosen metamodel's study on the analyses' fields. */
-function configureAnalyses() {
+export function configureAnalyses() {
   const { study } = session.current;
   for (const form of $$('form.analysis')) {
     const prefix = form.id.replace(/-form$/, '');
@@ -135,7 +138,7 @@ function download(anchor, name, type, content) {
 
 // ---- The exceedance explorer ---------------------------------------------------------------------
 
-async function explore(event) {
+export async function explore(event) {
   event.preventDefault();
   const form = event.target;
   const request = analysisRequest(form, 'explore');
@@ -157,7 +160,7 @@ function curveSeries(curve) {
   return { name: curve.name, x: answer.thresholds, y: answer.probabilities, lower: answer.lower, upper: answer.upper };
 }
 
-function drawExceedance() {
+export function drawExceedance() {
   const { latest, kept } = session.curves;
   if (!latest) return;
   const unit = UNITS[latest.answer.response.kind];
@@ -185,7 +188,7 @@ function drawExceedance() {
 
 // ---- Annual curve, fragility, sensitivity ----------------------------------------------------------
 
-async function hazard(event) {
+export async function hazard(event) {
   event.preventDefault();
   const form = event.target;
   const request = analysisRequest(form, 'hazard');
@@ -231,7 +234,7 @@ function hazardFields(form, request) {
   return true;
 }
 
-async function fragility(event) {
+export async function fragility(event) {
   event.preventDefault();
   const form = event.target;
   const request = analysisRequest(form, 'fragility');
@@ -257,7 +260,7 @@ async function fragility(event) {
   }));
 }
 
-async function sensitivity(event) {
+export async function sensitivity(event) {
   event.preventDefault();
   const form = event.target;
   const request = analysisRequest(form, 'sensitivity');

@@ -1,7 +1,12 @@
 // windmeta's page: a client of the public API like any other. Every action is an API call; long
 // work (calibrations, validations, analyses) goes through operations whose progress arrives on the
 // event stream, so nothing on the page waits on a long request.
-'use strict';
+// The page's one entry point: the modules it needs are imported here, and the browser loads the
+// rest through them.
+import { drawExceedance, explore, fragility, hazard, sensitivity, setUpAnalysisForms } from './analyses.js';
+import { $, session, setUpKey } from './client.js';
+import { calibrate, deleteMetamodel, loadMetamodels, loadPresets, showPreset, validate } from './metamodels.js';
+import { loadOperations } from './operations.js';
 
 /** Loads a list, its failure shown in the list's own error line (cleared by a success); whether it loaded. */
 async function reload(list, load) {
@@ -22,7 +27,7 @@ async function loadEverything() {
 }
 
 function start() {
-  setUpKey();
+  setUpKey(loadEverything);
   setUpAnalysisForms();
   $('#calibration-preset').addEventListener('change', showPreset);
   $('#calibration-form').addEventListener('submit', calibrate);

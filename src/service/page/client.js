@@ -1,12 +1,11 @@
 // The page's API client: requests with the key, refusals shown next to the fields they name, and
 // a check of JSON against the API's own schemas before it is sent.
-'use strict';
 
-const $ = (selector, root = document) => root.querySelector(selector);
-const $$ = (selector, root = document) => Array.from(root.querySelectorAll(selector));
+export const $ = (selector, root = document) => root.querySelector(selector);
+export const $$ = (selector, root = document) => Array.from(root.querySelectorAll(selector));
 
 /** What the page holds for this browser tab. */
-const session = {
+export const session = {
   /** The API key, kept for the browser session only. */
   key: sessionStorage.getItem('windmeta.key') || '',
   /** The chosen metamodel: {id, metamodel, study}. */
@@ -21,12 +20,11 @@ const session = {
   curves: { latest: null, kept: null },
 };
 
-const UNITS = { displacement: 'm', drift: 'm', acceleration: 'm/s²', damper_force: 'N', damper_stroke: 'm' };
-const UNIT_TAGS = { displacement: 'm', drift: 'm', acceleration: 'm_s2', damper_force: 'n', damper_stroke: 'm' };
-const format = (value) => Charts.format(value);
+export const UNITS = { displacement: 'm', drift: 'm', acceleration: 'm/s²', damper_force: 'N', damper_stroke: 'm' };
+export const UNIT_TAGS = { displacement: 'm', drift: 'm', acceleration: 'm_s2', damper_force: 'n', damper_stroke: 'm' };
 
 /** A refused request: the problem document the API sent. */
-class ApiProblem extends Error {
+export class ApiProblem extends Error {
   constructor(status, problem) {
     super(problem.detail || problem.title || `HTTP ${status}`);
     this.status = status;
@@ -34,7 +32,7 @@ class ApiProblem extends Error {
   }
 }
 
-async function api(method, path, body, headers = {}) {
+export async function api(method, path, body, headers = {}) {
   const init = { method, headers: { Accept: 'application/json', ...headers } };
   if (session.key) init.headers.Authorization = `Bearer ${session.key}`;
   if (body !== undefined) {
@@ -63,7 +61,8 @@ function askForKey(message) {
   $('#key-status').textContent = message;
 }
 
-function setUpKey() {
+/** The key form; `onKey` runs once a key has been entered. */
+export function setUpKey(onKey) {
   if (session.key) {
     $('#key-form').hidden = false;
     $('#api-key').value = session.key;
@@ -73,13 +72,13 @@ function setUpKey() {
     session.key = $('#api-key').value.trim();
     sessionStorage.setItem('windmeta.key', session.key);
     $('#key-status').textContent = '';
-    loadEverything();
+    onKey();
   });
 }
 
 // ---- Errors next to their fields ---------------------------------------------------------------
 
-function clearErrors(form) {
+export function clearErrors(form) {
   $$('.error', form).forEach((node) => { node.textContent = ''; });
   $$('[aria-invalid]', form).forEach((node) => node.removeAttribute('aria-invalid'));
 }
@@ -88,7 +87,7 @@ function clearErrors(form) {
  * Shows a problem's field errors next to their fields (the slot `[data-error-for=<field>]` of a
  * generated field, else `prefix-<field>-error`) and the rest above the form.
  */
-function showProblem(form, prefix, error) {
+export function showProblem(form, prefix, error) {
   const general = $(`#${prefix}-error`);
   if (!(error instanceof ApiProblem)) {
     general.textContent = String(error);
@@ -118,7 +117,7 @@ function showProblem(form, prefix, error) {
 }
 
 /** A number field's value: undefined when empty, an error when it is not a number. */
-function numberField(input, errors, integer) {
+export function numberField(input, errors, integer) {
   if (input.validity.badInput) {
     errors.push({ field: input.name, detail: 'is not a number' });
     return undefined;
@@ -131,13 +130,13 @@ function numberField(input, errors, integer) {
 
 // ---- A check of JSON against the API's own schemas ---------------------------------------------
 
-async function apiSpec() {
+export async function apiSpec() {
   if (!session.spec) session.spec = (await api('GET', '/openapi.json')).body;
   return session.spec;
 }
 
 /** The errors of `value` against an OpenAPI schema (the parts of JSON Schema the API uses). */
-function checkSchema(schema, value, path, spec, errors) {
+export function checkSchema(schema, value, path, spec, errors) {
   if (schema.$ref) return checkSchema(spec.components.schemas[schema.$ref.split('/').pop()], value, path, spec, errors);
   if (schema.oneOf || schema.anyOf) {
     const options = schema.oneOf || schema.anyOf;

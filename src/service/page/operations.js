@@ -1,6 +1,7 @@
 // Operations as a live list: each followed on its event stream to the end, with progress, cancel
 // and error text; forms that start one wait for it here.
-'use strict';
+import { format } from './charts.js';
+import { $, ApiProblem, api, clearErrors, session, showProblem } from './client.js';
 
 function describeProgress(progress) {
   if (!progress) return '';
@@ -106,7 +107,7 @@ async function cancelOperation(id) {
   }
 }
 
-async function loadOperations() {
+export async function loadOperations() {
   const { body } = await api('GET', '/v1/operations?limit=20');
   body.operations.slice().reverse().forEach((operation) => {
     showOperation(operation);
@@ -116,7 +117,7 @@ async function loadOperations() {
 }
 
 /** Runs `work` (which starts an operation) with a status line, and gives the finished operation's result. */
-async function throughOperation(form, prefix, start) {
+export async function throughOperation(form, prefix, start) {
   const status = $(`#${prefix}-status`);
   const button = $('button[type="submit"]', form);
   clearErrors(form);

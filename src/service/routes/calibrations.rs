@@ -23,7 +23,7 @@ pub fn router() -> OpenApiRouter<AppState> {
         (status = 202, description = "Queued; follow `Location`", body = Operation,
             headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
         (status = 422, description = "A field is invalid (named in `errors`), a combination of fields is (square matrices of one size, time and generation steps that resolve the cut-off, a storm within the wind's period, admissible marginals), the study exceeds the server's memory or storm-step budget, or the Idempotency-Key was used with another request", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "The queue is full", body = ProblemDetails, content_type = "application/problem+json",
+        (status = 503, description = "The queue is full, or the database does not answer now", body = ProblemDetails, content_type = "application/problem+json",
             headers(("Retry-After" = u64, description = "Seconds before trying again"))),
     ))]
 async fn start_calibration(

@@ -173,7 +173,7 @@ async fn exceedance_curve(
             headers(("Location" = String, description = "The operation"), ("Retry-After" = u64, description = "Seconds before polling"))),
         (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
         (status = 422, description = "A field is invalid (named in `errors`), or the Idempotency-Key was used with another request", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "The queue is full", body = ProblemDetails, content_type = "application/problem+json",
+        (status = 503, description = "The queue is full, or the database does not answer now", body = ProblemDetails, content_type = "application/problem+json",
             headers(("Retry-After" = u64, description = "Seconds before trying again"))),
     ))]
 async fn start_validation(

@@ -6,7 +6,7 @@
 use crate::service::ServeArgs;
 use utoipa::OpenApi;
 use utoipa::openapi::path::{Operation, ParameterIn};
-use utoipa::openapi::schema::Schema;
+use utoipa::openapi::schema::{ObjectBuilder, Schema, Type};
 use utoipa::openapi::security::{Http, HttpAuthScheme, SecurityRequirement, SecurityScheme};
 use utoipa::openapi::{ContentBuilder, Ref, RefOr, Response, ResponseBuilder};
 
@@ -75,14 +75,15 @@ fn set_maximum(spec: &mut utoipa::openapi::OpenApi, schema: &str, property: &str
 }
 
 /// A shared error response: problem details with the given description.
-fn study(description: &str) -> Response {
+fn problem_response(description: &str) -> Response {
     let content = ContentBuilder::new().schema(Some(Ref::from_schema_name("ProblemDetails"))).build();
     ResponseBuilder::new().description(description).content("application/problem+json", content).build()
 }
 
 /// The responses no handler writes itself, and the rule saying which operations can return them:
-/// - every `/v1/` operation: 401 (when the server has API keys) and 500 (the database failed),
-///   except the presets, which touch no database;
+/// - every `/v1/` operation: 401 (when the server has API keys), and 500 (the database failed)
+///   and 503 with `Retry-After` (the database does not answer now), except the presets, which
+///   touch no database;
 /// - every operation with a JSON body: 400 (malformed), 413 (too large), 415 (not JSON);
 /// - every operation with query parameters: 400 (a value of the wrong type).
 pub fn add_shared_responses(spec: &mut utoipa::openapi::OpenApi) {
@@ -96,8 +97,15 @@ pub fn add_shared_responses(spec: &mut utoipa::openapi::OpenApi) {
         ("InternalError", "The server failed (the database); the error is logged"),
     ];
     for (name, description) in shared {
-        components.responses.insert(name.to_string(), RefOr::T(study(description)));
+        components.responses.insert(name.to_string(), RefOr::T(problem_response(description)));
     }
+    let mut unavailable = problem_response("The database does not answer now (restarting, unreachable or locked)");
+    let retry_after = utoipa::openapi::HeaderBuilder::new()
+        .schema(Some(ObjectBuilder::new().schema_type(Type::Integer).minimum(Some(0.0))))
+        .description(Some("Seconds before asking again"))
+        .build();
+    unavailable.headers.insert("Retry-After".to_string(), RefOr::T(retry_after));
+    components.responses.insert("DatabaseUnavailable".to_string(), RefOr::T(unavailable));
     components.schemas.insert("OperationEvent".to_string(), RefOr::T(crate::service::schema::operation_event_schema()));
     describe_event_stream(spec);
     for (path, item) in spec.paths.paths.iter_mut() {
@@ -129,6 +137,11 @@ fn add_to_operation(path: &str, operation: &mut Operation) {
         operation.security = Some(vec![SecurityRequirement::default(), SecurityRequirement::new("bearer", [""; 0])]);
         if !path.starts_with("/v1/presets") {
             shared.push(("500", "InternalError"));
+            // Routes that document their own 503 (a full queue, no sampling permit) say there
+            // that the database may be the reason too.
+            if !operation.responses.responses.contains_key("503") {
+                shared.push(("503", "DatabaseUnavailable"));
+            }
         }
     }
     if operation.request_body.is_some() {

@@ -197,7 +197,7 @@ async fn cancel_operation(State(state): State<AppState>, Path(id): Path<String>)
     responses(
         (status = 200, description = "`operation` events, each an Operation as JSON (schema `OperationEvent`)", content_type = "text/event-stream", body = String),
         (status = 404, description = "No such operation", body = ProblemDetails, content_type = "application/problem+json"),
-        (status = 503, description = "Too many event streams are open on this server", body = ProblemDetails, content_type = "application/problem+json",
+        (status = 503, description = "Too many event streams are open on this server, or the database does not answer now", body = ProblemDetails, content_type = "application/problem+json",
             headers(("Retry-After" = u64, description = "Seconds before trying again"))),
     ))]
 async fn operation_events(

@@ -2,9 +2,13 @@
 //! (no CDN, nothing fetched at run time, no JavaScript build). The page is a client of the public
 //! API like any other; serving it needs no key (it holds no data), the API it calls does.
 //!
+//! The script is a set of ES modules (no build step) entered through `app.js`, the only one the
+//! page names; each module imports the others it needs.
+//!
 //! Caching: the page itself is revalidated on every load (`no-cache` with an ETag, so a new binary
 //! is picked up at once); it names its assets with their content digest (`/assets/app.js?v=…`),
-//! so they are cached for a year and a new version is a new address. The Content-Security-Policy
+//! and every module names the modules it imports the same way, so they are cached for a year and a
+//! new version is a new address. The Content-Security-Policy
 //! admits only the page's own origin: no inline script or style, no other host.
 
 use axum::Router;
@@ -27,14 +31,14 @@ const CONTENT_SECURITY_POLICY: &str = "default-src 'self'; script-src 'self'; st
 /// One embedded file with its type and digest.
 struct Asset {
     name: &'static str,
-    body: &'static str,
+    body: String,
     content_type: &'static str,
     /// The first 16 hex digits of the body's SHA-256: the ETag and the version in its address.
     digest: String,
 }
 
 impl Asset {
-    fn new(name: &'static str, body: &'static str, content_type: &'static str) -> Asset {
+    fn new(name: &'static str, body: String, content_type: &'static str) -> Asset {
         let digest = Sha256::digest(body.as_bytes()).iter().take(8).map(|b| format!("{b:02x}")).collect();
         Asset { name, body, content_type, digest }
     }
@@ -42,17 +46,28 @@ impl Asset {
 
 const SCRIPT: &str = "text/javascript; charset=utf-8";
 
-/// The page's script (in the order the page loads it) and style sheet.
-static ASSETS: LazyLock<[Asset; 7]> = LazyLock::new(|| {
-    [
-        Asset::new("charts.js", include_str!("../page/charts.js"), SCRIPT),
-        Asset::new("client.js", include_str!("../page/client.js"), SCRIPT),
-        Asset::new("operations.js", include_str!("../page/operations.js"), SCRIPT),
-        Asset::new("models.js", include_str!("../page/models.js"), SCRIPT),
-        Asset::new("analyses.js", include_str!("../page/analyses.js"), SCRIPT),
-        Asset::new("app.js", include_str!("../page/app.js"), SCRIPT),
-        Asset::new("style.css", include_str!("../page/style.css"), "text/css; charset=utf-8"),
-    ]
+/// The page's modules, each after the modules it imports, and its style sheet.
+const SOURCES: [(&str, &str, &str); 7] = [
+    ("charts.js", include_str!("../page/charts.js"), SCRIPT),
+    ("client.js", include_str!("../page/client.js"), SCRIPT),
+    ("operations.js", include_str!("../page/operations.js"), SCRIPT),
+    ("analyses.js", include_str!("../page/analyses.js"), SCRIPT),
+    ("metamodels.js", include_str!("../page/metamodels.js"), SCRIPT),
+    ("app.js", include_str!("../page/app.js"), SCRIPT),
+    ("style.css", include_str!("../page/style.css"), "text/css; charset=utf-8"),
+];
+
+/// The assets as served: a module names each module it imports by its versioned address, so that a
+/// changed module changes the address (and the digest) of every module that imports it.
+static ASSETS: LazyLock<Vec<Asset>> = LazyLock::new(|| {
+    let mut assets: Vec<Asset> = Vec::with_capacity(SOURCES.len());
+    for (name, body, content_type) in SOURCES {
+        let body = assets.iter().fold(body.to_string(), |body, imported| {
+            body.replace(&format!("'./{}'", imported.name), &format!("'./{}?v={}'", imported.name, imported.digest))
+        });
+        assets.push(Asset::new(name, body, content_type));
+    }
+    assets
 });
 
 /// The page with its assets' addresses carrying their digests.
@@ -61,7 +76,7 @@ static INDEX: LazyLock<Asset> = LazyLock::new(|| {
         let address = format!("/assets/{}", asset.name);
         html.replace(&format!("\"{address}\""), &format!("\"{address}?v={}\"", asset.digest))
     });
-    Asset::new("index.html", Box::leak(html.into_boxed_str()), "text/html; charset=utf-8")
+    Asset::new("index.html", html, "text/html; charset=utf-8")
 });
 
 pub fn router() -> Router<AppState> {
@@ -87,7 +102,8 @@ fn serve(asset: &Asset, request: &HeaderMap, cache: &'static str) -> Response {
         .get(header::IF_NONE_MATCH)
         .and_then(|v| v.to_str().ok())
         .is_some_and(|tags| tags.split(',').any(|tag| tag.trim().trim_start_matches("W/") == etag));
-    let mut response = if fresh { StatusCode::NOT_MODIFIED.into_response() } else { asset.body.into_response() };
+    let mut response =
+        if fresh { StatusCode::NOT_MODIFIED.into_response() } else { asset.body.clone().into_response() };
     let headers = response.headers_mut();
     if !fresh {
         headers.insert(header::CONTENT_TYPE, HeaderValue::from_static(asset.content_type));

@@ -8,7 +8,8 @@ use crate::progress::Observer;
 use crate::service::AppState;
 use crate::service::cache::Loaded;
 use crate::service::error::{ApiError, ProblemDetails};
-use crate::service::exceedance::{Rendering, RequestWatch, StopOnDrop};
+use crate::service::exceedance::Rendering;
+use crate::service::watch::{RequestWatch, StopOnDrop};
 use crate::study::Study;
 use crate::surrogate::Metamodel;
 use axum::http::{HeaderMap, header};
@@ -114,7 +115,7 @@ pub enum SamplingResponses {
         content_type = "application/problem+json"
     )]
     Invalid(ProblemDetails),
-    #[response(status = 503, description = "The queue is full (asynchronous requests), every synchronous sampling slot is taken, the request was not answered within the server's timeout, or the server is shutting down",
+    #[response(status = 503, description = "The queue is full (asynchronous requests), every synchronous sampling slot is taken, the request was not answered within the server's timeout, the server is shutting down, or the database does not answer now",
         content_type = "application/problem+json", headers(("Retry-After" = u64, description = "Seconds before trying again")))]
     Unavailable(ProblemDetails),
 }

@@ -21,6 +21,9 @@ pub fn now_ms() -> i64 {
     SystemTime::now().duration_since(UNIX_EPOCH).map_or(0, |d| d.as_millis() as i64)
 }
 
+/// How long a caller waits for a connection (sqlx's default is 30 s).
+const ACQUIRE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(3);
+
 /// The database behind the service; cheap to clone (a pool handle).
 #[derive(Debug, Clone)]
 pub struct Store {
@@ -52,6 +55,9 @@ impl Store {
         };
         let pool = AnyPoolOptions::new()
             .max_connections(if backend == Backend::Sqlite { 1 } else { 8 })
+            // A request waits this long for a connection before it is answered 503: long enough
+            // for a busy pool, short against a client's patience while the database is down.
+            .acquire_timeout(ACQUIRE_TIMEOUT)
             .after_connect(|conn, _| {
                 Box::pin(async move {
                     if conn.backend_name() == "SQLite" {

@@ -1,12 +1,13 @@
 //! What the suite's tests share: the service under test ([`app`]), the metamodel every test that
 //! only needs one samples ([`fixture`]), the test databases ([`postgres`]), the server's logs
-//! ([`logs`]), spectral estimates of simulated series ([`spectra`]), and the one way a test that
-//! cannot run says so ([`unavailable`]).
+//! ([`logs`]), a database outage on demand ([`proxy`]), spectral estimates of simulated series
+//! ([`spectra`]), and the one way a test that cannot run says so ([`unavailable`]).
 
 pub mod app;
 pub mod fixture;
 pub mod logs;
 pub mod postgres;
+pub mod proxy;
 pub mod spectra;
 
 use std::io::Write;

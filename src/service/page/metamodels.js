@@ -1,8 +1,12 @@
 // Calibration (presets, the form, the advanced box) and the stored metamodels (diagnostics,
 // validations and their scatter, delete).
-'use strict';
+import { configureAnalyses } from './analyses.js';
+import * as Charts from './charts.js';
+import { format } from './charts.js';
+import { $, $$, ApiProblem, api, apiSpec, checkSchema, clearErrors, numberField, session, showProblem } from './client.js';
+import { loadOperations, throughOperation } from './operations.js';
 
-async function loadPresets() {
+export async function loadPresets() {
   const { body } = await api('GET', '/v1/presets');
   const select = $('#calibration-preset');
   select.replaceChildren(...body.presets.map((preset) => new Option(`${preset.name} — ${preset.floors} floors`, preset.name)));
@@ -12,7 +16,7 @@ async function loadPresets() {
   showPreset();
 }
 
-function showPreset() {
+export function showPreset() {
   const preset = session.presets.find((p) => p.name === $('#calibration-preset').value);
   if (!preset) return;
   $('#calibration-preset-about').textContent = `${preset.description} ${preset.floors} floors, ${format(preset.roof_height_m)} m; first frequencies ${preset.frequencies_rad_s.map((w) => format(w / (2 * Math.PI))).join(', ')} Hz.`;
@@ -23,7 +27,7 @@ function showPreset() {
   }
 }
 
-async function calibrate(event) {
+export async function calibrate(event) {
   event.preventDefault();
   const form = event.target;
   clearErrors(form);
@@ -60,7 +64,7 @@ async function calibrate(event) {
 
 // ---- Metamodels ----------------------------------------------------------------------------------
 
-async function loadMetamodels() {
+export async function loadMetamodels() {
   const { body } = await api('GET', '/v1/metamodels?limit=100');
   const rows = body.metamodels.map((m) => {
     const row = document.createElement('tr');
@@ -104,13 +108,19 @@ function showDiagnostics() {
   $('#metamodel-summary').textContent = `${calibration.options.experiments} experiments; mean relative error over the experiments: NARX ${format(calibration.narx_mean_relative_error)}, PC-NARX ${format(calibration.pc_narx_mean_relative_error)}.`;
   $('#diagnostics-table tbody').replaceChildren(...calibration.modes.map((mode) => {
     const row = document.createElement('tr');
-    const cells = [mode.mode, mode.selected_terms.join(', '), format(mode.narx_mean_relative_error), format(mode.pc_narx_mean_relative_error), mode.coefficient_pce_terms.join(' '), mode.diverged_experiments];
+    const cells = [mode.mode, mode.selected_terms.join(', '), format(mode.narx_mean_relative_error), format(mode.pc_narx_mean_relative_error), mode.coefficient_pce_terms.join(' '), mode.diverged_experiments, refinementsAtCap(mode.refinement)];
     for (const cell of cells) row.insertCell().textContent = cell;
     return row;
   }));
 }
 
-async function validate(event) {
+/** Refinements that stopped at their iteration cap, out of those run (none run: a dash). */
+function refinementsAtCap(r) {
+  const run = r.converged + r.iteration_cap + r.no_improving_step + r.undefined_start;
+  return run ? `${r.iteration_cap} of ${run}` : '—';
+}
+
+export async function validate(event) {
   event.preventDefault();
   const form = event.target;
   if (!session.current) return;
@@ -143,7 +153,7 @@ function showValidation(report) {
   $('#validation-chart').replaceChildren(chart);
 }
 
-async function deleteMetamodel() {
+export async function deleteMetamodel() {
   if (!session.current) return;
   const id = session.current.id;
   if (!window.confirm(`Delete metamodel ${id}? Its coefficients are removed for every user of this server.`)) return;

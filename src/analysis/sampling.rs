@@ -1,0 +1,160 @@
+//! Sampling a metamodel's peaks in parallel, for every analysis: storms drawn from the input
+//! model (or given rows of inputs and their storm streams), run by batches of [`LANES`] through
+//! the free run, reduced to the peaks of one or several responses.
+
+use super::Response;
+use super::motion_peaks::motion_sink;
+use crate::error::{Error, Result};
+use crate::progress::{Observer, Progress};
+use crate::simd::LANES;
+use crate::study::Study;
+use crate::surrogate::{BatchInput, BatchWorkspace, Metamodel, ModalScales, Reduction};
+use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
+use crate::wind::{self, ForceSource};
+use rayon::prelude::*;
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// Most samples one sampling request may ask for.
+pub const MAX_SAMPLES: usize = 1_000_000;
+
+/// Peaks of `response` over `samples` storms of the metamodel, inputs drawn from `inputs` (the
+/// metamodel's own, possibly with some held fixed). Sample k's inputs and storm depend only on
+/// (seed, k). A diverging free run fails the request rather than being dropped.
+pub fn metamodel_peaks(
+    metamodel: &Metamodel,
+    study: &Study,
+    inputs: &InputModel,
+    samples: usize,
+    seed: u64,
+    response: Response,
+    observer: &dyn Observer,
+) -> Result<Vec<f64>> {
+    check_samples(samples)?;
+    let rows = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
+    let storms: Vec<usize> = (0..samples).collect();
+    let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
+    peaks_at(metamodel, &draws, response, observer)
+}
+
+/// Errs unless 1 ≤ samples ≤ [`MAX_SAMPLES`].
+pub fn check_samples(samples: usize) -> Result<()> {
+    if samples == 0 || samples > MAX_SAMPLES {
+        return Err(Error::invalid("samples", format!("must be between 1 and {MAX_SAMPLES}, got {samples}")));
+    }
+    Ok(())
+}
+
+/// The storms an analysis runs through the metamodel: row i's physical inputs, and the stream of
+/// the run seeded with `seed` its wind is drawn from (two rows with the same stream see the same
+/// storm phases, which common random numbers and Sobol's pick-freeze designs rely on).
+pub struct Draws<'a> {
+    pub study: &'a Study,
+    pub rows: &'a [Vec<f64>],
+    pub storms: &'a [usize],
+    pub seed: u64,
+    pub on_divergence: OnDivergence,
+}
+
+/// What a storm whose metamodel free run diverges does to an analysis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum OnDivergence {
+    /// The analysis fails, naming the sample (where every peak is needed: moments, Sobol indices).
+    Fail,
+    /// Its peak is taken as infinite: it exceeds every threshold (conservative; counted and reported
+    /// by the analyses that allow it).
+    Exceed,
+}
+
+/// Peaks of `response` for every row of `draws`, in parallel by batches of [`LANES`], reporting
+/// progress and stopping when `observer` asks.
+pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observer: &dyn Observer) -> Result<Vec<f64>> {
+    Ok(peak_sets_at(metamodel, draws, &[response], observer)?.into_iter().map(|peaks| peaks[0]).collect())
+}
+
+/// Peaks of each of `responses` for every row of `draws` (`[row][response]`). A damper group's
+/// envelope is the largest peak of its dampers, all run together.
+pub fn peak_sets_at(
+    metamodel: &Metamodel,
+    draws: &Draws,
+    responses: &[Response],
+    observer: &dyn Observer,
+) -> Result<Vec<Vec<f64>>> {
+    let members: Vec<Vec<Response>> =
+        responses.iter().map(|r| r.members(&draws.study.structure)).collect::<Result<_>>()?;
+    let sets = floor_peak_sets_at(metamodel, draws, &members.concat(), observer)?;
+    let largest_of_members = |row: Vec<f64>| -> Vec<f64> {
+        let mut rest = &row[..];
+        members
+            .iter()
+            .map(|m| {
+                let (these, after) = rest.split_at(m.len());
+                rest = after;
+                these.iter().fold(0.0, |a: f64, &b| a.max(b))
+            })
+            .collect()
+    };
+    Ok(sets.into_iter().map(largest_of_members).collect())
+}
+
+/// Peaks of each of the floor responses `responses` for every row of `draws`, in parallel by
+/// batches of [`LANES`], reporting progress and stopping when `observer` asks. One displacement,
+/// drift or stroke is a combination formed inside the free run; anything else comes from the
+/// batch's blocks ([`motion_sink`]), every response from the same runs.
+fn floor_peak_sets_at(
+    metamodel: &Metamodel,
+    draws: &Draws,
+    responses: &[Response],
+    observer: &dyn Observer,
+) -> Result<Vec<Vec<f64>>> {
+    let Draws { study, rows, storms, seed, on_divergence } = *draws;
+    assert_eq!(rows.len(), storms.len(), "one storm per row");
+    let path = metamodel.calibration.options.wind;
+    let weights = match responses {
+        [response] => response.modal_weights(&metamodel.modes.shapes, &study.structure)?,
+        _ => None,
+    };
+    let sink_for = |inputs: &[&[f64]], scales: &ModalScales| {
+        motion_sink(study, &metamodel.modes.shapes, responses, inputs, scales)
+    };
+    let reduction = match &weights {
+        Some(weights) => Reduction::Combination(weights),
+        None => Reduction::Motion(&sink_for),
+    };
+    let (done, total) = (AtomicUsize::new(0), rows.len());
+    let peaks: Vec<Vec<Vec<f64>>> = rows
+        .par_chunks(LANES)
+        .zip(storms.par_chunks(LANES))
+        .enumerate()
+        .map_init(
+            || (wind::TransformWorkspace::default(), BatchWorkspace::default()),
+            |(wind_workspace, batch_workspace), (chunk, (xs, keys))| {
+                if observer.cancelled() {
+                    return Err(Error::Cancelled);
+                }
+                let storms = xs
+                    .iter()
+                    .zip(keys)
+                    .map(|(x, &k)| Ok(study.sample_storm(x, path, seed, k, wind_workspace)?.1))
+                    .collect::<Result<Vec<_>>>()?;
+                let batch: Vec<BatchInput> = xs
+                    .iter()
+                    .zip(&storms)
+                    .enumerate()
+                    .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
+                    .collect();
+                let peaks = match on_divergence {
+                    OnDivergence::Fail => metamodel.peaks(study, &batch, &reduction, batch_workspace)?,
+                    OnDivergence::Exceed => metamodel
+                        .peaks_or_divergence(study, &batch, &reduction, batch_workspace)?
+                        .into_iter()
+                        .map(|peaks| peaks.unwrap_or_else(|| vec![f64::INFINITY; responses.len()]))
+                        .collect(),
+                };
+                let done = done.fetch_add(xs.len(), Ordering::Relaxed) + xs.len();
+                observer.progress(Progress::Samples { done, total });
+                Ok(peaks)
+            },
+        )
+        .collect::<Result<_>>()?;
+    Ok(peaks.concat())
+}
