@@ -20,7 +20,9 @@ if ! "$venv/bin/st" --version 2>/dev/null | grep -q "$SCHEMATHESIS_VERSION"; the
     "$python" -m venv "$venv"
     "$venv/bin/pip" install --quiet "schemathesis==$SCHEMATHESIS_VERSION"
 fi
-cargo build --release --quiet
+# The binary as the integration tests build it (`cargo test` unifies the dev-dependencies' features
+# into the crate's, so a plain `cargo build` after it would compile the crate a second time).
+cargo test --release --no-run --quiet
 work=$(mktemp -d)
 port=$(python3 -c 'import socket; s = socket.socket(); s.bind(("127.0.0.1", 0)); print(s.getsockname()[1])')
 base="http://127.0.0.1:$port"

@@ -13,8 +13,9 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 use windmeta::analysis::{Response, metamodel_peaks};
 use windmeta::error::Error;
-use windmeta::progress::{Observer, Progress};
+use windmeta::progress::{Observer, Progress, Silent};
 use windmeta::study::Study;
+use windmeta::surrogate::phases::{assemble, fit_experiments, plan};
 use windmeta::surrogate::{CalibrationOptions, calibrate};
 
 const LATENCY_BOUND: Duration = Duration::from_secs(2);
@@ -61,30 +62,42 @@ fn options() -> CalibrationOptions {
     CalibrationOptions { experiments: 24, seed: 1, ..Default::default() }
 }
 
+/// Runs `work` under an observer that stops it at `trigger`, and checks that it stopped, soon.
+fn stops_soon<T>(stage: &str, trigger: Trigger, work: impl FnOnce(&StopAt) -> windmeta::error::Result<T>) {
+    let observer = StopAt::new(trigger);
+    let outcome = work(&observer);
+    let latency = observer.latency();
+    eprintln!("{stage}: stopped {:.0} ms after the request", latency.as_secs_f64() * 1e3);
+    assert!(matches!(outcome, Err(Error::Cancelled)), "{stage}: {:?}", outcome.map(|_| "finished"));
+    assert!(latency < LATENCY_BOUND, "{stage}: {latency:?}");
+}
+
 #[test]
 fn a_stop_reaches_every_stage_within_about_a_second() {
     let study = study();
     let options = options();
-    let selection = options.selection_experiments;
-    let stages: [(&str, Trigger); 4] = [
-        // Selection storms: wind generation and integration of the reference model.
-        ("reference storms", |p| matches!(p, Progress::Experiments { done: 1, .. })),
-        // NARX structure selection over the candidates.
-        ("structure selection", |p| matches!(p, Progress::Structure { mode: 1 })),
-        // The other storms with the refinement of their coefficients (reported after the selection's).
-        ("storms and refinement", |p| matches!(p, Progress::Experiments { done, .. } if *done == 21)),
-        // Polynomial chaos expansions.
-        ("expansions", |p| matches!(p, Progress::Expansion { mode: 1 })),
-    ];
-    assert_eq!(selection, 20, "the third trigger counts on 20 selection experiments");
-    for (stage, trigger) in stages {
-        let observer = StopAt::new(trigger);
-        let outcome = calibrate(&study, &options, &observer);
-        let latency = observer.latency();
-        eprintln!("{stage}: stopped {:.0} ms after the request", latency.as_secs_f64() * 1e3);
-        assert!(matches!(outcome, Err(Error::Cancelled)), "{stage}: {:?}", outcome.map(|_| "finished"));
-        assert!(latency < LATENCY_BOUND, "{stage}: {latency:?}");
-    }
+    assert_eq!(options.selection_experiments, 20, "the third trigger counts on 20 selection experiments");
+    // Selection storms: wind generation and integration of the reference model.
+    let first_storm: Trigger = |p| matches!(p, Progress::Experiments { done: 1, .. });
+    stops_soon("reference storms", first_storm, |observer| calibrate(&study, &options, observer));
+    // NARX structure selection over the candidates.
+    let selection: Trigger = |p| matches!(p, Progress::Structure { mode: 1 });
+    stops_soon("structure selection", selection, |observer| calibrate(&study, &options, observer));
+    // The later stages run the calibration's own phases from one plan, instead of planning again
+    // for each: the other storms with the refinement of their coefficients (reported after the
+    // selection's twenty), then the polynomial chaos expansions.
+    let planned = plan(&study, &options, &Silent).unwrap();
+    let remaining = planned.plan.remaining();
+    let storms: Trigger = |p| matches!(p, Progress::Experiments { done: 21, .. });
+    stops_soon("storms and refinement", storms, |observer| {
+        fit_experiments(&study, &options, &planned.plan, &remaining, 20, observer)
+    });
+    let mut fits = planned.fit_selection(&options, &Silent).unwrap();
+    fits.extend(fit_experiments(&study, &options, &planned.plan, &remaining, 20, &Silent).unwrap());
+    let expansions: Trigger = |p| matches!(p, Progress::Expansion { mode: 1 });
+    stops_soon("expansions", expansions, |observer| {
+        assemble(&study, &options, &planned, fits, planned.seconds.clone(), observer)
+    });
 
     // The shared fixture, calibrated on two-minute storms (the NARX models do not depend on the
     // storm's length), samples full-size storms.
