@@ -21,7 +21,7 @@
 
 mod exact;
 mod gates;
-mod lanes;
+mod lane_models;
 
 use super::Response;
 use super::response::damper_below;
@@ -32,7 +32,7 @@ use crate::study::{MAX_MODES, Study};
 use crate::surrogate::{ModalScales, MotionSink};
 use exact::ExactSteps;
 use gates::{Gate, Gates};
-use lanes::LaneModels;
+use lane_models::LaneModels;
 
 /// Steps whose bound is taken together before any of them is looked at one by one.
 const CHUNK: usize = 32;
