@@ -229,7 +229,7 @@ impl SparsePce {
 
     /// Fits a sparse expansion of `targets` observed at standard-space points `xi`, each point's
     /// squared error counted with its weight (all 1 for a design of the input model itself; see
-    /// [`crate::surrogate::design`] for designs drawn from another law). `cancel` is checked between
+    /// [`crate::surrogate::design`] for designs drawn from another law). `observer` is asked to stop between
     /// the rows of each basis' Gram matrix and the steps of its LARS path.
     pub fn fit(
         model: &InputModel,

@@ -2,7 +2,7 @@
 //! with k ≤ [`DENSE_LAGS`], on at most [`DENSE_MODES`] modes, run as dense coefficient arrays with
 //! the modes and lags fixed at compile time, in one loop that interpolates, recurses, reduces the
 //! outputs (a [`StepSink`]) and accumulates the divergence test, with the state in registers.
-//! Written once over [`Vector`] and compiled per instruction set (`dispatch`).
+//! Written once over [`Vector`] and compiled per instruction set ([`crate::simd::run_widest`]).
 
 use super::ModeProgram;
 use super::inputs::{Prepared, interpolate, splat_weights};

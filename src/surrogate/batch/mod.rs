@@ -12,8 +12,10 @@
 //! - `dense`: the paper's structures (constant, lagged inputs and outputs to the first power) as
 //!   dense arrays with modes and lags fixed at compile time, one fused loop per step;
 //! - `general`: any other structure, from term lists, a block of steps at a time;
-//! - `simd` and `dispatch`: the vector types and the choice among them;
-//! - `sink`: what the run produces (blocks of outputs or per-lane peaks) and where it diverged.
+//! - `dispatch`: the free run as a kernel of the vector type, run by [`crate::simd::run_widest`]
+//!   on the widest vectors the processor has;
+//! - `sink`: what the run produces (blocks of outputs or per-lane peaks), the reductions a peak
+//!   request asks for, and where a run diverged.
 //!
 //! Every product that is summed is a fused multiply-add (`f64::mul_add`: one rounding, the same on
 //! every processor; the SIMD versions are only chosen where the processor has FMA) and no operation
