@@ -3,7 +3,7 @@
 //! requests as operations.
 
 use super::ServeArgs;
-use super::exceedance::Rendering;
+use super::rendering::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
     ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions, Response,

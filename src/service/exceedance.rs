@@ -1,7 +1,9 @@
-//! Exceedance requests: what a client asks, how it is checked, and the sampling that answers it,
-//! shared by the synchronous route and the worker that runs large requests as operations.
+//! Exceedance requests: what a client asks, how it is checked, the sampling that answers it
+//! (shared by the synchronous route and the worker that runs large requests as operations), and
+//! the answer in each of its renderings.
 
 use super::ServeArgs;
+use super::rendering::Rendering;
 use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
 use crate::analysis::exceedance_svg;
@@ -167,32 +169,14 @@ pub struct ExceedanceAnswer {
     pub metamodel_id: String,
 }
 
-/// How a synchronous answer is sent, by `Accept`.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Rendering {
-    Json,
-    Csv,
-    Svg,
-}
-
-impl Rendering {
-    pub fn from_accept(accept: &str) -> Rendering {
-        if accept.contains("text/csv") {
-            Rendering::Csv
-        } else if accept.contains("image/svg+xml") {
-            Rendering::Svg
-        } else {
-            Rendering::Json
-        }
-    }
-
+impl ExceedanceAnswer {
     /// The content type and the body (blocking: an SVG of a long curve takes milliseconds).
-    pub fn render(self, answer: &ExceedanceAnswer) -> (&'static str, String) {
-        let curve = &answer.curve;
-        match self {
-            Rendering::Json => ("application/json", serde_json::to_string(answer).expect("a curve serialises")),
+    pub fn render(&self, rendering: Rendering) -> (&'static str, String) {
+        let curve = &self.curve;
+        match rendering {
+            Rendering::Json => ("application/json", serde_json::to_string(self).expect("a curve serialises")),
             Rendering::Csv => {
-                let mut text = format!("threshold_{},probability,lower,upper\n", answer.response.unit_tag());
+                let mut text = format!("threshold_{},probability,lower,upper\n", self.response.unit_tag());
                 for i in 0..curve.thresholds.len() {
                     let row = [curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]];
                     text += &format!("{},{},{},{}\n", row[0], row[1], row[2], row[3]);
@@ -200,7 +184,7 @@ impl Rendering {
                 ("text/csv", text)
             }
             Rendering::Svg => {
-                let label = format!("peak {} x ({})", answer.response.describe(), answer.response.unit());
+                let label = format!("peak {} x ({})", self.response.describe(), self.response.unit());
                 ("image/svg+xml", exceedance_svg(&[("PC-NARX", curve)], &label))
             }
         }

@@ -8,6 +8,7 @@ mod error;
 mod exceedance;
 mod jobs;
 mod lease;
+mod rendering;
 mod requests;
 mod routes;
 mod schema;

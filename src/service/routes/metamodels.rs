@@ -155,7 +155,7 @@ async fn exceedance_curve(
         }
     };
     let work: Work = Box::new(move |metamodel, study, observer, rendering| {
-        Ok(rendering.render(&request.answer(metamodel, study, &id, observer)?))
+        Ok(request.answer(metamodel, study, &id, observer)?.render(rendering))
     });
     answer_or_queue(&state, &headers, loaded, storms, queued, work).await
 }

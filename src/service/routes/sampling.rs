@@ -8,7 +8,7 @@ use crate::progress::Observer;
 use crate::service::AppState;
 use crate::service::cache::Loaded;
 use crate::service::error::{ApiError, ProblemDetails};
-use crate::service::exceedance::Rendering;
+use crate::service::rendering::Rendering;
 use crate::service::watch::{RequestWatch, StopOnDrop};
 use crate::study::Study;
 use crate::surrogate::Metamodel;
