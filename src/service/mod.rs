@@ -150,8 +150,10 @@ async fn shutdown_signal() {
 
 /// `windmeta serve`: runs the service until interrupted.
 pub fn serve(args: &ServeArgs) -> Result<String> {
+    // Colour codes only on a terminal: a container's or a service manager's log keeps plain text.
     let _ = tracing_subscriber::fmt()
         .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
+        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stdout()))
         .try_init();
     let runtime =
         tokio::runtime::Runtime::new().map_err(|e| Error::Internal(format!("cannot start the runtime: {e}")))?;
