@@ -64,9 +64,8 @@ impl Application {
     pub async fn build(config: ServeArgs) -> Result<Application> {
         config.check()?;
         let keys = ApiKeys::new(&config.api_keys)?;
-        let store = Store::connect(&config.database_url)
-            .await
-            .map_err(|e| Error::Internal(format!("database {}: {e}", config.database_url)))?;
+        let store =
+            Store::connect(&config.database_url).await.map_err(|e| database_failure(&config.database_url, e))?;
         let listener = TcpListener::bind(&config.listen)
             .await
             .map_err(|e| Error::Internal(format!("cannot listen on {}: {e}", config.listen)))?;
@@ -109,6 +108,25 @@ impl Application {
             let _ = worker.await;
         }
         Ok(())
+    }
+}
+
+/// Why the database could not be opened, in words that say what to do: a SQLite file that cannot
+/// be opened or created (SQLite's code 14) is nearly always a folder this process may not write, as
+/// a container's bind mount owned by another user.
+fn database_failure(url: &str, error: sqlx::Error) -> Error {
+    let cannot_open = matches!(&error, sqlx::Error::Database(e) if e.code().as_deref() == Some("14"));
+    match url.strip_prefix("sqlite://").filter(|_| cannot_open) {
+        Some(path) => {
+            let folder = std::path::Path::new(path.split('?').next().unwrap_or(path))
+                .parent()
+                .map_or_else(|| ".".to_string(), |p| p.display().to_string());
+            Error::Internal(format!(
+                "database {url}: {error}; the folder {folder} must exist and be writable by this process (in the \
+                 container image: uid 10001)"
+            ))
+        }
+        None => Error::Internal(format!("database {url}: {error}")),
     }
 }
 

@@ -43,6 +43,16 @@ async fn empty_or_blank_api_keys_are_refused_at_start_up() {
         .output()
         .unwrap();
     assert_eq!(output.status.code(), Some(3), "{}", String::from_utf8_lossy(&output.stderr));
+    // A SQLite file in a folder it cannot create or write (a container's bind mount owned by
+    // another user, as a rule): the message says which folder and what it needs.
+    let output = Command::new(env!("CARGO_BIN_EXE_windmeta"))
+        .args(["serve", "--listen", "127.0.0.1:0", "--database-url", "sqlite:///proc/windmeta-nowhere/windmeta.db"])
+        .env_remove("WINDMETA_API_KEYS")
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert_eq!(output.status.code(), Some(3), "{stderr}");
+    assert!(stderr.contains("the folder /proc/windmeta-nowhere must exist and be writable"), "{stderr}");
 }
 
 /// Every request below would have cost time or memory without bound; each is refused with the
