@@ -15,11 +15,34 @@ use std::collections::BTreeMap;
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(untagged)]
 pub enum ClimateSpec {
-    /// Speeds (m/s) by return period in years, e.g. `{"50": 32.0, "700": 40.0}`.
-    ReturnPeriodSpeeds {
-        return_period_speeds: BTreeMap<String, f64>,
-    },
+    ReturnPeriodSpeeds(ReturnPeriodSpeeds),
     Marginal(Marginal),
+}
+
+// A type of its own rather than an inline variant: an inline map inside `oneOf` is dropped by
+// openapi-python-client as a duplicate model, and a named schema is generated once.
+/// A climate given by the speeds of two or more return periods, through which a Gumbel law is drawn.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct ReturnPeriodSpeeds {
+    /// Speeds (m/s) by return period in years, e.g. `{"50": 32.0, "700": 40.0}`.
+    #[cfg_attr(feature = "openapi", schema(schema_with = return_period_speeds_schema))]
+    pub return_period_speeds: BTreeMap<String, f64>,
+}
+
+/// Two or more speeds (m/s) by return period.
+#[cfg(feature = "openapi")]
+fn return_period_speeds_schema() -> utoipa::openapi::Object {
+    use utoipa::openapi::{ObjectBuilder, Type};
+    ObjectBuilder::new()
+        .schema_type(Type::Object)
+        .description(Some(
+            "Speeds (m/s) by return period in years, e.g. `{\"50\": 32.0, \"700\": 40.0}`: the periods are \
+             numbers of years above 1, and the speeds grow with them.",
+        ))
+        .min_properties(Some(2))
+        .additional_properties(Some(ObjectBuilder::new().schema_type(Type::Number).exclusive_minimum(Some(0.0))))
+        .build()
 }
 
 impl<'de> Deserialize<'de> for ClimateSpec {
@@ -34,7 +57,7 @@ impl<'de> Deserialize<'de> for ClimateSpec {
                     return Err(D::Error::custom("`return_period_speeds` takes no other field"));
                 }
                 let speeds = BTreeMap::<String, f64>::deserialize(speeds).map_err(D::Error::custom)?;
-                Ok(ClimateSpec::ReturnPeriodSpeeds { return_period_speeds: speeds })
+                Ok(ClimateSpec::ReturnPeriodSpeeds(ReturnPeriodSpeeds { return_period_speeds: speeds }))
             }
             None => Marginal::deserialize(value).map(ClimateSpec::Marginal).map_err(D::Error::custom),
         }
@@ -53,7 +76,7 @@ impl ClimateSpec {
                 marginal.validate(field)?;
                 *marginal
             }
-            ClimateSpec::ReturnPeriodSpeeds { return_period_speeds } => {
+            ClimateSpec::ReturnPeriodSpeeds(ReturnPeriodSpeeds { return_period_speeds }) => {
                 gumbel_through(return_period_speeds, &format!("{field}.return_period_speeds"))?
             }
         };

@@ -3,6 +3,15 @@
 use crate::error::{Error, Result};
 use clap::{Args, Parser, ValueEnum};
 
+/// How `windmeta serve` writes its log.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
+pub enum LogFormat {
+    /// Lines for people: colour on a terminal, plain text elsewhere.
+    Text,
+    /// One JSON object per line, with the request or job spans, for log collectors.
+    Json,
+}
+
 /// What a replica does, so that request handling and heavy work can scale apart.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum)]
 pub enum Role {
@@ -26,6 +35,9 @@ pub struct ServeArgs {
     /// What this replica does.
     #[arg(long, env = "WINDMETA_ROLE", value_enum, default_value_t = Role::All)]
     pub role: Role,
+    /// The log's format (standard output; `RUST_LOG` filters it).
+    #[arg(long, env = "WINDMETA_LOG_FORMAT", value_enum, default_value_t = LogFormat::Text)]
+    pub log_format: LogFormat,
     /// Calibration jobs run at once (each uses every core through rayon).
     #[arg(long, env = "WINDMETA_WORKERS", default_value_t = 1)]
     pub workers: usize,

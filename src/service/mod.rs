@@ -15,7 +15,7 @@ mod schema;
 mod store;
 mod watch;
 
-pub use config::{Role, ServeArgs};
+pub use config::{LogFormat, Role, ServeArgs};
 pub use requests::{CalibrationRequest, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
 pub use routes::{openapi, openapi_for};
 
@@ -115,6 +115,7 @@ impl Application {
 /// be opened or created (SQLite's code 14) is nearly always a folder this process may not write, as
 /// a container's bind mount owned by another user.
 fn database_failure(url: &str, error: sqlx::Error) -> Error {
+    let url = &without_password(url);
     let cannot_open = matches!(&error, sqlx::Error::Database(e) if e.code().as_deref() == Some("14"));
     match url.strip_prefix("sqlite://").filter(|_| cannot_open) {
         Some(path) => {
@@ -128,6 +129,30 @@ fn database_failure(url: &str, error: sqlx::Error) -> Error {
         }
         None => Error::Internal(format!("database {url}: {error}")),
     }
+}
+
+/// The database URL as an error message may show it: a password in it (`user:password@` or
+/// `?password=`) replaced by `***`, since start-up errors end up in logs.
+fn without_password(url: &str) -> String {
+    let Ok(mut parsed) = url::Url::parse(url) else { return url.to_string() };
+    let in_query = parsed.query_pairs().any(|(key, _)| key == "password");
+    if parsed.password().is_none() && !in_query {
+        return url.to_string();
+    }
+    if parsed.password().is_some() {
+        let _ = parsed.set_password(Some("***"));
+    }
+    if in_query {
+        let pairs: Vec<(String, String)> = parsed
+            .query_pairs()
+            .map(|(key, value)| {
+                let value = if key == "password" { "***".to_string() } else { value.into_owned() };
+                (key.into_owned(), value)
+            })
+            .collect();
+        parsed.query_pairs_mut().clear().extend_pairs(pairs);
+    }
+    parsed.to_string()
 }
 
 /// How often expired idempotency keys are deleted.
@@ -166,13 +191,22 @@ async fn shutdown_signal() {
     tracing::info!("shutting down");
 }
 
+/// The process's log on standard output. Colour codes only on a terminal: a container's or a
+/// service manager's log keeps plain text, or JSON lines that a collector parses without rules.
+fn start_logging(format: LogFormat) {
+    let filter = || tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into());
+    let _ = match format {
+        LogFormat::Text => tracing_subscriber::fmt()
+            .with_env_filter(filter())
+            .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stdout()))
+            .try_init(),
+        LogFormat::Json => tracing_subscriber::fmt().json().with_env_filter(filter()).with_span_list(true).try_init(),
+    };
+}
+
 /// `windmeta serve`: runs the service until interrupted.
 pub fn serve(args: &ServeArgs) -> Result<String> {
-    // Colour codes only on a terminal: a container's or a service manager's log keeps plain text.
-    let _ = tracing_subscriber::fmt()
-        .with_env_filter(tracing_subscriber::EnvFilter::try_from_default_env().unwrap_or_else(|_| "info".into()))
-        .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stdout()))
-        .try_init();
+    start_logging(args.log_format);
     let runtime =
         tokio::runtime::Runtime::new().map_err(|e| Error::Internal(format!("cannot start the runtime: {e}")))?;
     runtime.block_on(async {

@@ -1,8 +1,10 @@
 //! The commands as a user runs them: outputs, reproducibility, and refusals of bad input with a
 //! message naming what is wrong and a non-zero exit.
 
+use crate::harness::app::database;
 use serde_json::Value;
-use std::process::{Command, Output};
+use std::io::{BufRead, BufReader};
+use std::process::{Command, Output, Stdio};
 
 fn windmeta(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_windmeta")).args(args).output().expect("the binary runs")
@@ -256,4 +258,35 @@ fn an_older_processor_is_refused_by_name() {
     let new = on("Haswell");
     assert!(new.status.success(), "{}", String::from_utf8_lossy(&new.stderr));
     assert!(String::from_utf8_lossy(&new.stdout).starts_with("windmeta "));
+}
+
+/// The service's log off a terminal (a container's, a service manager's): plain lines without
+/// colour codes, or on request one JSON object per line that a collector reads without rules.
+#[test]
+fn the_service_logs_plain_lines_or_json_off_a_terminal() {
+    for format in ["text", "json"] {
+        let mut server = Command::new(env!("CARGO_BIN_EXE_windmeta"))
+            .args(["serve", "--listen", "127.0.0.1:0", "--log-format", format])
+            .env("DATABASE_URL", format!("sqlite://{}", database(&format!("log-{format}")).display()))
+            .env_remove("RUST_LOG")
+            .env_remove("NO_COLOR")
+            .env_remove("WINDMETA_API_KEYS")
+            .stdout(Stdio::piped())
+            .spawn()
+            .expect("the binary starts");
+        let log = BufReader::new(server.stdout.take().unwrap());
+        let listening = log.lines().map_while(Result::ok).find(|line| line.contains("windmeta listening"));
+        let _ = server.kill();
+        let _ = server.wait();
+        let line = listening.unwrap_or_else(|| panic!("{format}: the server never logged its address"));
+        assert!(!line.contains('\u{1b}'), "{format}: colour codes in {line:?}");
+        if format == "json" {
+            let entry: Value = serde_json::from_str(&line).expect("one JSON object per line");
+            assert_eq!(entry["level"], "INFO", "{entry}");
+            assert!(entry["timestamp"].is_string(), "{entry}");
+            assert!(entry["fields"]["address"].as_str().is_some_and(|a| a.starts_with("127.0.0.1:")), "{entry}");
+        } else {
+            assert!(line.contains(" INFO ") && line.contains("address=127.0.0.1:"), "{line}");
+        }
+    }
 }
