@@ -76,10 +76,9 @@ api "$port_2" POST "/v1/metamodels/$metamodel/exceedance" '{"samples": 500, "fix
 import json, sys
 c = json.load(sys.stdin)
 i = min(range(len(c["probabilities"])), key=lambda i: abs(c["probabilities"][i] - 0.5))
-print("{} at 35 m/s: P(peak > {:.3f}) = {:.3f} [{:.3f}, {:.3f}] from {} samples".format(
-    c["response"], c["thresholds"][i], c["probabilities"][i], c["lower"][i], c["upper"][i], c["samples"]))'
+print("roof {} at 35 m/s: P(peak > {:.3f}) = {:.3f} [{:.3f}, {:.3f}] from {} samples".format(
+    c["response"]["kind"], c["thresholds"][i], c["probabilities"][i], c["lower"][i], c["upper"][i], c["samples"]))'
 
-step "which replica ran what"
-compose logs --no-color replica-1 replica-2 | grep -E 'job\{' | grep -cE 'replica-1' | sed 's/^/log lines of jobs on replica one: /'
-compose logs --no-color replica-1 replica-2 | grep -E 'job\{' | grep -cE 'replica-2' | sed 's/^/log lines of jobs on replica two: /'
+step "the job's log lines, by replica"
+compose logs --no-color replica-1 replica-2 | grep -F 'job{' || true
 step "done"

@@ -34,8 +34,10 @@ pub struct ReturnPeriodSpeeds {
 #[cfg(feature = "openapi")]
 fn return_period_speeds_schema() -> utoipa::openapi::Object {
     use utoipa::openapi::{ObjectBuilder, Type};
+    let years = ObjectBuilder::new().schema_type(Type::String).pattern(Some(r"^[0-9]+(\.[0-9]+)?$"));
     ObjectBuilder::new()
         .schema_type(Type::Object)
+        .property_names(Some(years))
         .description(Some(
             "Speeds (m/s) by return period in years, e.g. `{\"50\": 32.0, \"700\": 40.0}`: the periods are \
              numbers of years above 1, and the speeds grow with them.",

@@ -229,3 +229,24 @@ async fn idempotency_keys_expire() {
     assert_ne!(first, second, "an expired key replayed the operation");
     app.stop().await;
 }
+
+/// A malformed Idempotency-Key (the contract's pattern: 1 to 255 visible ASCII characters) is
+/// refused whether the request would be queued or answered at once, and nothing is queued.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn malformed_idempotency_keys_are_refused_queued_or_not() {
+    let app = spawn_app(&database("malformed-key")).await;
+    let id = fixture::install(&app, fixture::STORM_S).await;
+    let exceedance = format!("/v1/metamodels/{id}/exceedance");
+    for (path, body) in
+        [("/v1/calibrations", json!({"experiments": 4, "duration_s": 10})), (&exceedance, json!({"samples": 8}))]
+    {
+        for key in ["two words", "", &"k".repeat(256)] {
+            let asked = app.client.post(format!("{}{path}", app.address)).header("idempotency-key", key).json(&body);
+            let (s, ct, problem) = problem_details(asked.send().await.unwrap()).await;
+            assert_problem(s, &ct, &problem, 422, "Idempotency-Key");
+        }
+    }
+    let (_, list) = app.get("/v1/operations").await;
+    assert_eq!(list["operations"].as_array().map(Vec::len), Some(0), "{list}");
+    app.stop().await;
+}

@@ -8,6 +8,22 @@ use crate::service::store::Enqueued;
 /// How long a client should wait before offering work to a full queue again (s).
 const QUEUE_FULL_RETRY_S: u64 = 30;
 
+/// The request's `Idempotency-Key`, if it has one, checked against the contract's pattern: a
+/// malformed key is refused (422) whether the request is then queued or answered at once.
+pub fn idempotency_key(headers: &axum::http::HeaderMap) -> Result<Option<String>, ApiError> {
+    match headers.get("idempotency-key") {
+        None => Ok(None),
+        Some(v) if (1..=255).contains(&v.len()) && v.as_bytes().iter().all(u8::is_ascii_graphic) => {
+            Ok(Some(String::from_utf8_lossy(v.as_bytes()).into_owned()))
+        }
+        Some(_) => Err(crate::error::Error::invalid(
+            "Idempotency-Key",
+            "must be 1 to 255 visible ASCII characters without spaces",
+        )
+        .into()),
+    }
+}
+
 /// Queues a job and answers 202 with its `Location`, honouring `Idempotency-Key`: a retry with the
 /// same body gets the same operation, a different body under the same key is refused (422). A
 /// full queue is 503 with `Retry-After`.
@@ -20,19 +36,7 @@ pub async fn accept_job(
 ) -> Result<axum::response::Response, ApiError> {
     use axum::http::{StatusCode, header};
     use axum::response::IntoResponse;
-    let key = match headers.get("idempotency-key") {
-        None => None,
-        Some(v) if (1..=255).contains(&v.len()) && v.as_bytes().iter().all(u8::is_ascii_graphic) => {
-            Some(String::from_utf8_lossy(v.as_bytes()).into_owned())
-        }
-        Some(_) => {
-            return Err(crate::error::Error::invalid(
-                "Idempotency-Key",
-                "must be 1 to 255 visible ASCII characters without spaces",
-            )
-            .into());
-        }
-    };
+    let key = idempotency_key(headers)?;
     let new_id = uuid::Uuid::new_v4().to_string();
     let idempotency = key.as_deref().map(|k| (k, endpoint));
     let max_queued = state.config.max_queued_jobs as i64;

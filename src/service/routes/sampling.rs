@@ -4,6 +4,7 @@
 
 use super::accept_job;
 use super::operations::{Operation, OperationKind};
+use super::queue::idempotency_key;
 use crate::progress::Observer;
 use crate::service::AppState;
 use crate::service::cache::Loaded;
@@ -52,6 +53,8 @@ pub async fn answer_or_queue(
     queued: impl FnOnce() -> Queued,
     work: Work,
 ) -> Result<HttpResponse, ApiError> {
+    // A key is only used when the request is queued, but a malformed one is refused either way.
+    idempotency_key(headers)?;
     if storms > state.config.max_sync_samples || prefers_async(headers) {
         let Queued { endpoint, kind, job } = queued();
         return accept_job(state, headers, endpoint, kind, job).await;
