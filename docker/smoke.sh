@@ -2,7 +2,8 @@
 # The compose deployment end to end: builds the image, starts PostgreSQL and two replicas under a
 # project of its own (`windmeta-smoke`, with a generated password and API key), calibrates a small
 # metamodel through replica one, follows the operation and reads the metamodel and an exceedance
-# curve through replica two, then removes the project and its volume. Needs a Docker engine with
+# curve through replica two, stops replica one in the middle of a second calibration and sees
+# replica two finish it, then removes the project and its volume. Needs a Docker engine with
 # Compose v2, curl and python3.
 #
 #   bash docker/smoke.sh          # from anywhere; ports 18080 and 18081 unless SMOKE_PORT_1/2 are set
@@ -79,6 +80,28 @@ i = min(range(len(c["probabilities"])), key=lambda i: abs(c["probabilities"][i] 
 print("roof {} at 35 m/s: P(peak > {:.3f}) = {:.3f} [{:.3f}, {:.3f}] from {} samples".format(
     c["response"]["kind"], c["thresholds"][i], c["probabilities"][i], c["lower"][i], c["upper"][i], c["samples"]))'
 
-step "the job's log lines, by replica"
+step "a replica stopped in the middle of a job gives it back; the other finishes it"
+operation=$(api "$port_1" POST /v1/calibrations \
+    '{"preset": "frame40-kn", "experiments": 60, "duration_s": 300, "seed": 2}' | field id)
+for _ in $(seq 120); do
+    state=$(api "$port_2" GET "/v1/operations/$operation" | field state)
+    [[ $state == queued ]] || break
+    sleep 0.5
+done
+sleep 2
+compose stop replica-1
+for _ in $(seq 600); do
+    state=$(api "$port_2" GET "/v1/operations/$operation" | field state)
+    [[ $state == queued || $state == running ]] || break
+    sleep 1
+done
+[[ $state == succeeded ]] || { echo "the calibration ended $state" >&2; exit 1; }
+api "$port_2" GET "/v1/operations/$operation" | python3 -c '
+import json, sys
+o = json.load(sys.stdin)
+print("succeeded after", o["attempts"], "attempts: metamodel", o["metamodel_id"])'
+compose start replica-1
+
+step "the jobs' log lines, by replica"
 compose logs --no-color replica-1 replica-2 | grep -F 'job{' || true
 step "done"
