@@ -16,7 +16,7 @@ use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
 /// The wind input every annual analysis replaces by the climate.
-pub const WIND_SPEED: &str = "wind_speed";
+pub use crate::study::WIND_SPEED;
 
 /// Return periods (years) reported when none are asked for.
 pub const DEFAULT_RETURN_PERIODS: [f64; 7] = [10.0, 50.0, 100.0, 500.0, 700.0, 1000.0, 10000.0];

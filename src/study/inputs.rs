@@ -35,12 +35,16 @@ pub(super) fn default_inputs(structure: &Structure, damper_scale: f64) -> InputM
             marginal: Marginal::Uniform { lower: 0.0, upper: 100.0 * damper_scale },
         });
     }
-    inputs.push(Input { name: "wind_speed".into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } });
+    inputs.push(Input { name: WIND_SPEED.into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } });
     InputModel { inputs }
 }
 
+/// The storm's mean wind speed at the 10 m station (m/s): the input that the load scales with,
+/// that annual analyses replace by a climate, and whose germ the metamodel treats apart.
+pub const WIND_SPEED: &str = "wind_speed";
+
 /// Every physical input is non-negative; these must also stay away from zero.
-const POSITIVE_INPUTS: [&str; 3] = ["youngs_modulus", "mass_factor", "wind_speed"];
+const POSITIVE_INPUTS: [&str; 3] = ["youngs_modulus", "mass_factor", WIND_SPEED];
 
 /// Refuses a marginal that reaches values the input cannot take.
 pub(super) fn check_admissible(input: &Input) -> Result<()> {

@@ -11,7 +11,7 @@ mod presets;
 mod spec;
 mod storms;
 
-pub use inputs::PhysicalParameters;
+pub use inputs::{PhysicalParameters, WIND_SPEED};
 pub use presets::{DEFAULT_PRESET, PRESETS};
 pub use spec::StudySpec;
 pub use storms::{Order, StormRun, WindPath};

@@ -18,7 +18,7 @@
 
 use super::options::{CalibrationOptions, WindCoverage};
 use crate::error::{Error, Result};
-use crate::study::Study;
+use crate::study::{Study, WIND_SPEED};
 use crate::uncertainty::{Marginal, latin_hypercube, rng_from_seed};
 
 impl WindCoverage {
@@ -59,8 +59,8 @@ pub fn design(study: &Study, options: &CalibrationOptions) -> Result<Design> {
         return Ok(Design { weights: vec![1.0; points.len()], points });
     };
     coverage.validate()?;
-    let index = study.inputs.index_of("wind_speed")?;
-    let marginal = *study.inputs.marginal("wind_speed")?;
+    let index = study.inputs.index_of(WIND_SPEED)?;
+    let marginal = *study.inputs.marginal(WIND_SPEED)?;
     if matches!(marginal, Marginal::Constant { .. }) {
         return Err(Error::invalid("cover_wind_speeds", "the study holds wind_speed fixed; there is nothing to cover"));
     }
@@ -116,10 +116,10 @@ mod tests {
     #[test]
     fn covering_design_spans_the_range_and_weights_restore_the_input_model() {
         let study = study();
-        let index = study.inputs.index_of("wind_speed").unwrap();
+        let index = study.inputs.index_of(WIND_SPEED).unwrap();
         let d = design(&study, &covering(30.0, 75.0)).unwrap();
         let speeds: Vec<f64> = d.points.iter().map(|x| x[index]).collect();
-        let marginal = study.inputs.marginal("wind_speed").unwrap();
+        let marginal = study.inputs.marginal(WIND_SPEED).unwrap();
         let beyond = marginal.upper_quantile(1e-3);
         let far = speeds.iter().filter(|&&v| v > beyond).count() as f64;
         let expected = 0.5 * 2000.0 * (75.0 - beyond) / 45.0 + 0.5 * 2000.0 * 1e-3;

@@ -18,7 +18,7 @@ impl Metamodel {
     /// Static levels and coefficients of one sample.
     fn sample(&self, study: &Study, x: &[f64], forces: &dyn ForceSource) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
         study.inputs.check_sample(x)?;
-        let xi = study.inputs.to_standard(x);
+        let xi = self.germ(study, x);
         let levels = self
             .models
             .iter()
