@@ -40,7 +40,8 @@ fn return_period_speeds_schema() -> utoipa::openapi::Object {
         .property_names(Some(years))
         .description(Some(
             "Speeds (m/s) by return period in years, e.g. `{\"50\": 32.0, \"700\": 40.0}`: the periods are \
-             numbers of years above 1, and the speeds grow with them.",
+             numbers of years from 1, and the speeds grow with them. The T-year speed is exceeded in a \
+             year with probability 1 − exp(−1/T).",
         ))
         .min_properties(Some(2))
         .additional_properties(Some(ObjectBuilder::new().schema_type(Type::Number).exclusive_minimum(Some(0.0))))
@@ -127,18 +128,32 @@ impl ClimateCoverage {
     }
 }
 
+/// The annual probability that the level of return period T (years) is exceeded: 1 − exp(−1/T), the
+/// chance of at least one exceedance in a year when they come at a rate of 1/T a year. About 1/T
+/// for long periods; 0.632 for T = 1, so that 1-year levels exist.
+pub fn annual_probability_of_period(years: f64) -> f64 {
+    -(-1.0 / years).exp_m1()
+}
+
+/// The return period (years) of an annual exceedance probability p, the inverse of
+/// [`annual_probability_of_period`]: −1/ln(1 − p); none outside (0, 1).
+pub fn period_of_annual_probability(probability: f64) -> Option<f64> {
+    (probability > 0.0 && probability < 1.0).then(|| -1.0 / (-probability).ln_1p())
+}
+
 /// The Gumbel law through speeds v_T of return periods T: v = location + scale·y with the reduced
-/// variate y = −ln(−ln(1 − 1/T)), by least squares (exact through two points).
+/// variate y = −ln(−ln F(v_T)) = ln T (F(v_T) = exp(−1/T): see [`annual_probability_of_period`]),
+/// by least squares (exact through two points).
 fn gumbel_through(speeds: &BTreeMap<String, f64>, field: &str) -> Result<Marginal> {
     let mut points = Vec::with_capacity(speeds.len());
     for (years, &speed) in speeds {
-        let period: f64 = years.trim().parse().ok().filter(|t: &f64| t.is_finite() && *t > 1.0).ok_or_else(|| {
-            Error::invalid(format!("{field}.{years}"), "a return period is a number of years above 1")
+        let period: f64 = years.trim().parse().ok().filter(|t: &f64| t.is_finite() && *t >= 1.0).ok_or_else(|| {
+            Error::invalid(format!("{field}.{years}"), "a return period is a number of years, at least 1")
         })?;
         if !(speed.is_finite() && speed > 0.0 && speed < MAX_SPEED) {
             return Err(Error::invalid(format!("{field}.{years}"), format!("must lie in (0, {MAX_SPEED}) m/s")));
         }
-        points.push((-(-(-1.0 / period).ln_1p()).ln(), speed));
+        points.push((period.ln(), speed));
     }
     if points.len() < 2 {
         return Err(Error::invalid(field, "needs the speeds of at least two return periods"));
@@ -158,14 +173,24 @@ fn gumbel_through(speeds: &BTreeMap<String, f64>, field: &str) -> Result<Margina
 mod tests {
     use super::*;
 
-    /// Two points: the law passes through both (1 − F(v_T) = 1/T).
+    /// Two points: the law passes through both (1 − F(v_T) = 1 − exp(−1/T)), a 1-year speed too.
     #[test]
     fn gumbel_through_two_return_period_speeds_passes_through_them() {
-        let spec: ClimateSpec = serde_json::from_str(r#"{"return_period_speeds": {"50": 32.0, "700": 40.0}}"#).unwrap();
-        let law = spec.resolve("climate").unwrap();
-        for (t, v) in [(50.0, 32.0), (700.0, 40.0)] {
-            assert!((law.survival(v) * t - 1.0).abs() < 1e-10, "T = {t}: {}", law.survival(v) * t);
+        for (speeds, points) in [
+            (r#"{"50": 32.0, "700": 40.0}"#, [(50.0_f64, 32.0), (700.0, 40.0)]),
+            (r#"{"1": 21.0, "50": 30.0}"#, [(1.0, 21.0), (50.0, 30.0)]),
+        ] {
+            let spec: ClimateSpec = serde_json::from_str(&format!(r#"{{"return_period_speeds": {speeds}}}"#)).unwrap();
+            let law = spec.resolve("climate").unwrap();
+            for (t, v) in points {
+                let exact = 1.0 - (-1.0 / t).exp();
+                assert!((law.survival(v) / exact - 1.0).abs() < 1e-10, "T = {t}: {}", law.survival(v));
+                assert!((period_of_annual_probability(law.survival(v)).unwrap() / t - 1.0).abs() < 1e-10);
+            }
         }
+        // The 50-year speed is exceeded with 1 − e^(−1/50) = 0.019801, not 0.02.
+        assert!((annual_probability_of_period(50.0) - 0.0198013267).abs() < 1e-10);
+        assert!((annual_probability_of_period(1.0) - 0.6321205588).abs() < 1e-10);
     }
 
     /// Gumbel(25, 2.5): median 25 − 2.5·ln(ln 2) = 25.916, 10⁻⁵ speed 25 − 2.5·ln(−ln(1 − 10⁻⁵)) = 53.78.

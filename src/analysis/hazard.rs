@@ -2,6 +2,7 @@
 //! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
 //! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
 
+use super::climate::{annual_probability_of_period, period_of_annual_probability};
 use super::exceedance::{automatic_thresholds, check_confidence};
 use super::sampling::{Draws, OnDivergence, check_samples, peaks_at};
 use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
@@ -19,7 +20,11 @@ use statrs::distribution::{ContinuousCDF, Normal};
 pub use crate::study::WIND_SPEED;
 
 /// Return periods (years) reported when none are asked for.
-pub const DEFAULT_RETURN_PERIODS: [f64; 7] = [10.0, 50.0, 100.0, 500.0, 700.0, 1000.0, 10000.0];
+pub const DEFAULT_RETURN_PERIODS: [f64; 8] = [1.0, 10.0, 50.0, 100.0, 500.0, 700.0, 1000.0, 10000.0];
+
+/// A return period (years) that Neyman's allocation always aims at besides those asked for, so
+/// that the common levels keep their precision.
+const ALWAYS_TARGETED_PERIOD: f64 = 10.0;
 
 /// Longest return period (years) an analysis may ask for: 10⁻⁶ a year, two decades rarer than
 /// the 10⁻⁵ that at most 10⁵ storms resolve with a coefficient of variation below 0.3.
@@ -52,11 +57,11 @@ impl HazardOptions {
             check_thresholds(thresholds)?;
         }
         if self.return_periods.len() > 100
-            || self.return_periods.iter().any(|t| !(t.is_finite() && *t > 1.0 && *t <= MAX_RETURN_PERIOD))
+            || self.return_periods.iter().any(|t| !(t.is_finite() && *t >= 1.0 && *t <= MAX_RETURN_PERIOD))
         {
             return Err(Error::invalid(
                 "return_periods",
-                format!("must be at most 100 numbers of years above 1 and at most {MAX_RETURN_PERIOD:e}"),
+                format!("must be at most 100 numbers of years from 1 to {MAX_RETURN_PERIOD:e}"),
             ));
         }
         if let Some(limit) = self.limit {
@@ -66,9 +71,11 @@ impl HazardOptions {
         Ok(())
     }
 
-    /// The smallest annual probability the answer must resolve.
+    /// The smallest annual probability the answer must resolve, to the decade the strata need: 1/T
+    /// (within 1/(2T²) of the level's 1 − exp(−1/T), and a whole decade where that is a hair below
+    /// one, which would add a stratum that no level needs).
     fn smallest_probability(&self) -> f64 {
-        self.return_periods.iter().map(|t| 1.0 / t).fold(1e-4, f64::min)
+        self.return_periods.iter().map(|&t| 1.0 / t).fold(1e-4, f64::min)
     }
 }
 
@@ -77,10 +84,10 @@ impl HazardOptions {
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ReturnLevel {
     pub return_period_years: f64,
-    /// The level whose annual exceedance probability is 1/T (m); none when the sampled peaks do
-    /// not reach so rare a level.
+    /// The level whose annual exceedance probability is 1 − exp(−1/T) (≈ 1/T for long periods;
+    /// 0.632 for T = 1) (m); none when the sampled peaks do not reach so rare a level.
     pub value: Option<f64>,
-    /// Where the band's ends cross 1/T.
+    /// Where the band's ends cross that probability.
     pub lower: Option<f64>,
     pub upper: Option<f64>,
 }
@@ -114,7 +121,7 @@ pub struct HazardCurve {
     pub upper: Vec<f64>,
     /// Coefficient of variation of each probability; none where no storm exceeded.
     pub cov: Vec<Option<f64>>,
-    /// Mean recurrence interval 1/P (years); none where P is 0.
+    /// Mean recurrence interval −1/ln(1 − P) (years, ≈ 1/P for small P); none where P is 0 or 1.
     pub mri_years: Vec<Option<f64>>,
     pub return_levels: Vec<ReturnLevel>,
     pub reliability: Option<Reliability>,
@@ -210,7 +217,7 @@ pub fn hazard_curve(
         let targets: Vec<f64> = options
             .return_periods
             .iter()
-            .chain(&DEFAULT_RETURN_PERIODS[..1])
+            .chain(std::iter::once(&ALWAYS_TARGETED_PERIOD))
             .filter_map(|&t| return_level(&sample, &all, t, options.confidence).value)
             .collect();
         let counts = strata.neyman(&sample, &targets, budget);
@@ -229,7 +236,7 @@ pub fn hazard_curve(
         lower: estimates.iter().map(|e| e.lower).collect(),
         upper: estimates.iter().map(|e| e.upper).collect(),
         cov: estimates.iter().map(|e| e.cov).collect(),
-        mri_years: estimates.iter().map(|e| (e.probability > 0.0).then(|| 1.0 / e.probability)).collect(),
+        mri_years: estimates.iter().map(|e| period_of_annual_probability(e.probability)).collect(),
         probability_beyond_calibrated_range: estimates.iter().map(|e| e.beyond).collect(),
         thresholds,
         return_levels,
@@ -246,10 +253,11 @@ pub fn hazard_curve(
     })
 }
 
-/// The return level of period T: the first sampled peak where the estimate falls to 1/T, and where
+/// The return level of period T: the first sampled peak where the estimate falls to
+/// 1 − exp(−1/T), and where
 /// each end of the band does (by bisection: every one of them falls with the level).
 fn return_level(sample: &StratifiedPeaks, all: &[f64], period: f64, confidence: f64) -> ReturnLevel {
-    let target = 1.0 / period;
+    let target = annual_probability_of_period(period);
     let crossing = |end: fn(&Estimate) -> f64| {
         let i = all.partition_point(|&x| end(&sample.exceedance(x, confidence)) > target);
         all.get(i).copied()
@@ -360,7 +368,7 @@ mod tests {
             assert!(relative.abs() < 4.0 * cov, "p = {p}: {} (cov {cov})", curve.annual_probability[i]);
         }
         for r in &curve.return_levels {
-            let exact = level(1.0 / r.return_period_years);
+            let exact = level(1.0 - (-1.0 / r.return_period_years).exp());
             let (lo, hi) = (r.lower.unwrap(), r.upper.unwrap());
             assert!(
                 lo <= exact * 1.01 && exact <= hi * 1.01,
@@ -374,6 +382,16 @@ mod tests {
         assert!(beyond[4] > 0.1 * curve.annual_probability[4], "{beyond:?}");
         assert!(beyond[0] < 0.01 * curve.annual_probability[0], "{beyond:?}");
         assert!(curve.samples <= 20_000);
+        // The commonest levels: the 1-year one is exceeded with 1 − e⁻¹ = 0.632 a year, the 5-year
+        // one with 0.181 (not 1 and 0.2).
+        options.thresholds = None;
+        options.return_periods = vec![1.0, 5.0];
+        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma)).unwrap();
+        for r in &curve.return_levels {
+            let exact = level(1.0 - (-1.0 / r.return_period_years).exp());
+            let (lo, hi) = (r.lower.unwrap(), r.upper.unwrap());
+            assert!(lo <= exact && exact <= hi, "T = {}: {exact} not in [{lo}, {hi}]", r.return_period_years);
+        }
     }
 
     /// Plain Monte Carlo with the same number of storms agrees with the stratified estimate where

@@ -18,7 +18,7 @@ mod strata;
 mod validated_responses;
 mod validation;
 
-pub use climate::{ClimateCoverage, ClimateSpec};
+pub use climate::{ClimateCoverage, ClimateSpec, annual_probability_of_period, period_of_annual_probability};
 pub use exceedance::{
     ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,
     exceedance_curve, max_exceedance_gap,

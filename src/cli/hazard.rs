@@ -32,7 +32,8 @@ pub struct HazardArgs {
     /// Thresholds (m), comma separated; 50 spread over the sampled peaks when absent.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub thresholds: Option<Vec<f64>>,
-    /// Return periods (years), comma separated.
+    /// Return periods (years, from 1 to 10⁶), comma separated; the T-year level is exceeded in a
+    /// year with probability 1 − exp(−1/T).
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
     pub return_periods: Option<Vec<f64>>,
     /// A limit (m) whose annual probability and reliability index are reported.

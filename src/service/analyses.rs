@@ -46,8 +46,9 @@ pub struct HazardRequest {
     /// peaks when absent.
     #[schema(schema_with = thresholds_schema)]
     pub thresholds: Option<Vec<f64>>,
-    /// Return periods (years, above 1, at most 10⁶); 10, 50, 100, 500, 700, 1000 and 10 000 when
-    /// absent.
+    /// Return periods (years, from 1 to 10⁶); 1, 10, 50, 100, 500, 700, 1000 and 10 000 when
+    /// absent. The T-year level is exceeded in a year with probability 1 − exp(−1/T) (≈ 1/T for long
+    /// periods; 0.632 for T = 1).
     #[schema(max_items = 100)]
     pub return_periods: Option<Vec<f64>>,
     /// A limit (in the response's unit) whose annual probability and reliability index are reported.

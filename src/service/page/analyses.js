@@ -203,7 +203,7 @@ export async function hazard(event) {
   $('#hazard-chart').replaceChildren(Charts.lines({
     title: `Annual exceedance: ${responseLabel(answer)}`, xLabel: `peak x (${unit})`, yLabel: 'annual probability of exceedance', yLog: true,
     series: [{ name: `${answer.samples} storms`, x: answer.thresholds, y: answer.annual_probability, lower: answer.lower, upper: answer.upper }],
-    describe: (s, i) => `x = ${format(s.x[i])} ${unit}: ${format(s.y[i])} a year [${format(s.lower[i])}, ${format(s.upper[i])}], return period ${format(1 / s.y[i])} years`,
+    describe: (s, i) => `x = ${format(s.x[i])} ${unit}: ${format(s.y[i])} a year [${format(s.lower[i])}, ${format(s.upper[i])}], return period ${s.y[i] > 0 && s.y[i] < 1 ? format(-1 / Math.log1p(-s.y[i])) : '–'} years`,
   }));
   $('#hazard-table').hidden = false;
   $('#hazard-table tbody').replaceChildren(...answer.return_levels.map((level) => {
