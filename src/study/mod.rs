@@ -158,6 +158,24 @@ mod tests {
     use super::*;
     use crate::uncertainty::Marginal;
 
+    /// A Gumbel law of annual maxima is a wind speed's marginal (10⁻⁴³ below 0 m/s); a normal law
+    /// with a tenth of a percent below 0, or a uniform law from 0, is not.
+    #[test]
+    fn inputs_may_reach_below_zero_only_with_a_negligible_probability() {
+        let with = |name: &str, marginal: Marginal| {
+            let mut spec = StudySpec { preset: Some("frame40-kn".into()), ..Default::default() };
+            spec.inputs.insert(name.into(), marginal);
+            Study::from_spec(&spec)
+        };
+        assert!(with("wind_speed", Marginal::Gumbel { location: 22.0, scale: 2.2 }).is_ok());
+        assert!(with("wind_speed", Marginal::Normal { mean: 30.0, sd: 3.5 }).is_ok());
+        let refused = with("wind_speed", Marginal::Normal { mean: 30.0, sd: 10.0 }).unwrap_err().to_string();
+        assert!(refused.contains("inputs.wind_speed") && refused.contains("1.3e-3"), "{refused}");
+        assert!(with("wind_speed", Marginal::Uniform { lower: 0.0, upper: 40.0 }).is_err());
+        assert!(with("damper_c1", Marginal::Uniform { lower: 0.0, upper: 40.0 }).is_ok());
+        assert!(with("damper_c1", Marginal::Uniform { lower: -1.0, upper: 40.0 }).is_err());
+    }
+
     #[test]
     fn presets_have_the_papers_eight_inputs() {
         let p = Study::preset("frame40-kn").unwrap();
@@ -184,7 +202,7 @@ mod tests {
     fn bad_specs_are_refused_by_name() {
         assert!(Study::preset("frame41").unwrap_err().to_string().contains("unknown preset `frame41`"));
         let mut spec = StudySpec { preset: Some("frame40".into()), ..Default::default() };
-        spec.inputs.insert("youngs_modulus".into(), Marginal::Normal { mean: 210e9, sd: 15e9 });
+        spec.inputs.insert("youngs_modulus".into(), Marginal::Normal { mean: 210e9, sd: 100e9 });
         assert!(Study::from_spec(&spec).unwrap_err().to_string().starts_with("inputs.youngs_modulus"));
         let mut spec = StudySpec { preset: Some("frame40".into()), ..Default::default() };
         spec.inputs.insert("stiffness".into(), Marginal::Constant { value: 1.0 });
