@@ -93,8 +93,9 @@ impl ClimateSpec {
     }
 }
 
-/// A calibration asked to cover a climate: its design spans the speeds from the climate's median
-/// annual maximum to the speed exceeded with `annual_probability` a year (see
+/// A calibration asked to cover a climate: its design spans the speeds from the climate's 1-year
+/// speed (exceeded with 1 − e⁻¹ a year: where a comfort check starts) to the speed exceeded with
+/// `annual_probability` a year (see
 /// [`crate::surrogate::design`] for how the expansions stay the input model's).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
@@ -122,7 +123,8 @@ impl ClimateCoverage {
             ));
         }
         let law = self.climate.resolve(&format!("{field}.climate"))?;
-        let coverage = WindCoverage { lower: law.quantile(0.5), upper: law.upper_quantile(p) };
+        let one_year = law.upper_quantile(annual_probability_of_period(1.0));
+        let coverage = WindCoverage { lower: one_year, upper: law.upper_quantile(p) };
         coverage.validate()?;
         Ok(coverage)
     }
@@ -193,13 +195,14 @@ mod tests {
         assert!((annual_probability_of_period(1.0) - 0.6321205588).abs() < 1e-10);
     }
 
-    /// Gumbel(25, 2.5): median 25 − 2.5·ln(ln 2) = 25.916, 10⁻⁵ speed 25 − 2.5·ln(−ln(1 − 10⁻⁵)) = 53.78.
+    /// Gumbel(25, 2.5): 1-year speed 25, 10⁻⁵ speed 25 − 2.5·ln(−ln(1 − 10⁻⁵)) = 53.78.
     #[test]
-    fn coverage_runs_from_the_median_to_the_rarest_speed() {
+    fn coverage_runs_from_the_one_year_speed_to_the_rarest_speed() {
         let coverage: ClimateCoverage =
             serde_json::from_str(r#"{"climate": {"distribution": "gumbel", "location": 25, "scale": 2.5}}"#).unwrap();
         let speeds = coverage.wind_speeds("cover_climate").unwrap();
-        assert!((speeds.lower - (25.0 - 2.5 * 2f64.ln().ln())).abs() < 1e-9, "{speeds:?}");
+        // The 1-year speed of a Gumbel law is its location (reduced variate ln 1 = 0).
+        assert!((speeds.lower - 25.0).abs() < 1e-9, "{speeds:?}");
         assert!((speeds.upper - (25.0 - 2.5 * (-(-1e-5f64).ln_1p()).ln())).abs() < 1e-6, "{speeds:?}");
         let rare = ClimateCoverage { annual_probability: 0.5, ..coverage };
         assert!(

@@ -39,7 +39,7 @@ pub struct CalibrateArgs {
     /// are weighted so the expansions stay the input model's.
     #[arg(long, value_name = "LOWER:UPPER", conflicts_with = "cover_climate")]
     pub cover_wind_speeds: Option<String>,
-    /// Cover a climate (JSON, as `windmeta hazard --climate`): from its median annual maximum to
+    /// Cover a climate (JSON, as `windmeta hazard --climate`): from its 1-year speed to
     /// the speed of --cover-annual-probability.
     #[arg(long, value_name = "JSON")]
     pub cover_climate: Option<String>,

@@ -55,7 +55,7 @@ pub struct CalibrationRequest {
     /// experiments spread evenly over them, the fits weighted so the expansions stay the input
     /// model's. At most one of this and `cover_climate`.
     pub cover_wind_speeds: Option<WindCoverage>,
-    /// Cover a climate: from its median annual maximum speed to its speed of `annual_probability`.
+    /// Cover a climate: from its 1-year speed to its speed of `annual_probability`.
     pub cover_climate: Option<ClimateCoverage>,
 }
 
