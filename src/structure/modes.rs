@@ -20,9 +20,31 @@ pub struct Modes {
     pub modal_masses: Vec<f64>,
 }
 
+/// How mode shapes are scaled.
+#[derive(Clone, Copy)]
+enum Normalisation {
+    /// Unit roof component: the modal coordinate is the roof displacement the mode carries.
+    Roof,
+    /// Unit roof component, or unit largest component for a mode that leaves the roof at rest.
+    RoofWhereItMoves,
+}
+
 impl Modes {
-    /// The first `count` modes of `structure` at its reference stiffness and unit mass factor.
+    /// The first `count` modes of `structure` at its reference stiffness and unit mass factor,
+    /// every one roof-normalised (a mode that does not move the roof is refused).
     pub fn of(structure: &Structure, count: usize) -> Result<Modes> {
+        Self::solve(structure, count, Normalisation::Roof)
+    }
+
+    /// All the structure's modes for its classical damping matrix, which does not depend on how a
+    /// shape is scaled: roof-normalised where the roof moves, else to a unit largest component (a
+    /// high mode of a building whose storeys stiffen downwards can leave the roof at rest, and must
+    /// not refuse a study that retains three modes).
+    pub fn all(structure: &Structure) -> Result<Modes> {
+        Self::solve(structure, structure.floors(), Normalisation::RoofWhereItMoves)
+    }
+
+    fn solve(structure: &Structure, count: usize, normalisation: Normalisation) -> Result<Modes> {
         let n = structure.floors();
         if count == 0 || count > n {
             return Err(Error::invalid(
@@ -54,13 +76,23 @@ impl Modes {
                     "must be positive definite (a non-positive eigenvalue appeared)",
                 ));
             }
-            let largest = (0..n).map(|i| shapes[(i, m)].abs()).fold(0.0, f64::max);
-            let r = shapes[(roof, m)];
-            if r.abs() < 1e-9 * largest {
-                return Err(Error::Numerical(format!(
-                    "mode {} does not move the roof, so it cannot be roof-normalised",
-                    m + 1
-                )));
+            let largest =
+                (0..n).map(|i| shapes[(i, m)]).fold(0.0, |a: f64, b: f64| if b.abs() > a.abs() { b } else { a });
+            let mut r = shapes[(roof, m)];
+            if r.abs() < 1e-9 * largest.abs() {
+                match normalisation {
+                    Normalisation::Roof => {
+                        return Err(Error::invalid(
+                            "modes",
+                            format!(
+                                "mode {} of this structure does not move the roof, so it cannot be roof-normalised; \
+                                 retain fewer modes",
+                                m + 1
+                            ),
+                        ));
+                    }
+                    Normalisation::RoofWhereItMoves => r = largest,
+                }
             }
             for i in 0..n {
                 shapes[(i, m)] /= r;

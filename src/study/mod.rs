@@ -66,7 +66,7 @@ impl Study {
             return Err(Error::invalid("modes", format!("must be at most {MAX_MODES}, got {modes_count}")));
         }
         let modes = Modes::of(&structure, modes_count)?;
-        let all_modes = Modes::of(&structure, structure.floors())?;
+        let all_modes = Modes::all(&structure)?;
         let site = spec.wind.clone().unwrap_or_default();
         let wind = WindLoads::new(&site, &structure)?;
         let modal_wind = ModalWind::new(&wind, modes.shapes.as_ref());

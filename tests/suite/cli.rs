@@ -290,3 +290,41 @@ fn the_service_logs_plain_lines_or_json_off_a_terminal() {
         }
     }
 }
+
+/// A 25-storey shear building whose storey stiffness falls with height (k_i = 2·10⁹ · 0.9^i N/m):
+/// its 25th mode leaves the roof at rest (roof component 10⁻²² of its largest, by scipy), which
+/// the damping matrix does not mind and a study retaining three modes must not refuse.
+#[test]
+fn a_building_whose_highest_mode_leaves_the_roof_at_rest_runs() {
+    let floors = 25;
+    let storey = |i: usize| 2e9 * 0.9f64.powi(i as i32);
+    let mut stiffness = vec![vec![0.0; floors]; floors];
+    for i in 0..floors {
+        stiffness[i][i] += storey(i);
+        if i + 1 < floors {
+            stiffness[i][i] += storey(i + 1);
+            stiffness[i][i + 1] -= storey(i + 1);
+            stiffness[i + 1][i] -= storey(i + 1);
+        }
+    }
+    let mass: Vec<Vec<f64>> =
+        (0..floors).map(|i| (0..floors).map(|j| if i == j { 1e6 } else { 0.0 }).collect()).collect();
+    let dampers: Vec<serde_json::Value> =
+        (1..=floors).map(|f| serde_json::json!({"floor": f, "group": 1, "cos_angle": 0.8})).collect();
+    let structure = serde_json::json!({
+        "mass": mass, "stiffness": stiffness, "dampers": dampers,
+        "floor_elevations_m": (1..=floors).map(|f| 4.0 * f as f64).collect::<Vec<_>>(),
+        "floor_widths_m": vec![30.0; floors],
+    });
+    let dir = std::env::temp_dir().join(format!("windmeta-shear-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("spec.json");
+    std::fs::write(&path, serde_json::json!({"structure": structure, "modes": 3, "duration_s": 30}).to_string())
+        .unwrap();
+    let three = path.to_str().unwrap();
+    for order in [&[][..], &["--full-order"][..]] {
+        let v = json(&[&["simulate", "--spec", three, "--json"][..], order].concat());
+        assert!(v["peak_roof_displacement_m"].as_f64().is_some_and(|x| x > 0.0 && x.is_finite()), "{order:?}: {v}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
