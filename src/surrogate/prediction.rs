@@ -51,7 +51,7 @@ impl Metamodel {
             &mut workspace,
             &mut Sink::Blocks(&mut consume),
         )
-        .map_err(|e| batch_error(e, &[None]))?;
+        .map_err(|e| batch_error(e, study, &[(None, x)]))?;
         Ok(out)
     }
 
@@ -66,8 +66,7 @@ impl Metamodel {
         reduction: &Reduction,
         workspace: &mut BatchWorkspace,
     ) -> Result<Vec<Vec<f64>>> {
-        self.run_peaks(study, samples, reduction, workspace)?
-            .map_err(|e| batch_error(e, &samples.iter().map(|s| Some(s.0)).collect::<Vec<_>>()))
+        self.run_peaks(study, samples, reduction, workspace)?.map_err(|e| batch_error(e, study, &named(samples)))
     }
 
     /// As [`peaks`](Self::peaks), but a sample whose free run diverges, or whose model has no
@@ -94,7 +93,7 @@ impl Metamodel {
                 | Err(BatchError::Model { lane, error: Error::Numerical(_) }) => {
                     left.remove(lane);
                 }
-                Err(error) => return Err(batch_error(error, &batch.iter().map(|s| Some(s.0)).collect::<Vec<_>>())),
+                Err(error) => return Err(batch_error(error, study, &named(&batch))),
             }
         }
         Ok(peaks)
@@ -155,14 +154,22 @@ impl Metamodel {
     }
 }
 
-/// The error of a failed batch, naming the sample where it has a number.
-fn batch_error(error: BatchError, numbers: &[Option<usize>]) -> Error {
+/// A batch's samples as its errors name them: their numbers and inputs.
+fn named<'a>(samples: &[BatchInput<'a>]) -> Vec<(Option<usize>, &'a [f64])> {
+    samples.iter().map(|&(number, x, _)| (Some(number), x)).collect()
+}
+
+/// The error of a failed batch, naming the sample (its number where it has one) and its inputs,
+/// so that a user can tell an extrapolation (an input far outside the calibrated design) from a
+/// defect.
+fn batch_error(error: BatchError, study: &Study, samples: &[(Option<usize>, &[f64])]) -> Error {
     let (lane, message) = match error {
         BatchError::Model { lane, error } => (lane, error.to_string()),
         BatchError::Diverged(d) => (d.lane, format!("mode {}: the free run diverged at step {}", d.mode + 1, d.step)),
     };
-    match numbers.get(lane).copied().flatten() {
-        Some(k) => Error::Numerical(format!("sample {k}: {message}")),
-        None => Error::Numerical(message),
-    }
+    let Some(&(number, x)) = samples.get(lane) else { return Error::Numerical(message) };
+    let inputs: Vec<String> =
+        study.inputs.names().zip(x).map(|(name, value)| format!("{name} = {value:.4e}")).collect();
+    let sample = number.map_or_else(|| "the sample".to_string(), |k| format!("sample {k}"));
+    Error::Numerical(format!("{sample} ({}): {message}", inputs.join(", ")))
 }

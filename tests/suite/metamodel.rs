@@ -98,6 +98,9 @@ fn diverging_free_runs_are_reported() {
         Err(e) => e.to_string(),
     };
     assert!(err.contains("diverged"), "{err}");
+    // The error names the sample's inputs, so that a user can tell an extrapolation from a defect.
+    let speed = format!("wind_speed = {:.4e}", x[study.inputs.index_of("wind_speed").unwrap()]);
+    assert!(err.contains(&speed) && err.contains("youngs_modulus = "), "{err}");
 }
 
 /// Exceedance curves fall with the threshold, and the curve conditional on a strong wind lies
