@@ -75,7 +75,7 @@ impl HazardOptions {
     /// (within 1/(2T²) of the level's 1 − exp(−1/T), and a whole decade where that is a hair below
     /// one, which would add a stratum that no level needs).
     fn smallest_probability(&self) -> f64 {
-        self.return_periods.iter().map(|&t| 1.0 / t).fold(1e-4, f64::min)
+        self.return_periods.iter().map(|t| 1.0 / t).fold(1e-4, f64::min)
     }
 }
 

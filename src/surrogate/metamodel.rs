@@ -122,6 +122,13 @@ pub struct StageSeconds {
     pub total: f64,
 }
 
+/// An input whose germ is held from below: its index and the lowest germ it takes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct HeldGerm {
+    index: usize,
+    germ: f64,
+}
+
 /// A calibrated PC-NARX metamodel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
@@ -134,10 +141,11 @@ pub struct Metamodel {
     pub modes: ModalBasis,
     pub models: Vec<ModeModel>,
     pub calibration: CalibrationSummary,
-    /// The wind speed's germ at the calibration design's lowest speed, found once (see
-    /// [`Metamodel::germ`]); `None` where the study holds the wind speed fixed.
+    /// The wind speed's index and its germ at the calibration design's lowest speed, found once
+    /// (see [`Metamodel::germ`]); `None` where the study has no random wind speed.
     #[serde(skip)]
-    pub lowest_wind_germ: OnceLock<Option<f64>>,
+    #[cfg_attr(feature = "openapi", schema(ignore))]
+    pub(super) lowest_wind_germ: OnceLock<Option<HeldGerm>>,
 }
 
 impl Metamodel {
@@ -183,7 +191,7 @@ impl Metamodel {
     /// The expansions' germ at a physical sample: every input's ξ from its marginal, except a
     /// wind speed below the calibration design's lowest, whose ξ is held at that speed's. The
     /// Fréchet germ's lower tail is so thin that ξ is −21 at 18 m/s, where a polynomial of degree
-    /// 3 to 5 means nothing (free runs diverged from 20 m/s down); held, the coefficients are those
+    /// 3 to 5 means nothing (validation failed at 20 and 10 m/s); held, the coefficients are those
     /// of the lowest calibrated wind while the deviation force and the static gain times the
     /// sample's own mean force carry the load's fall exactly (median peak error 0.9 % at 20 m/s,
     /// 2.5 % at 10 m/s from a design starting at 24 m/s). Above the design the expansions
@@ -194,24 +202,24 @@ impl Metamodel {
     /// the calibration's options).
     pub fn germ(&self, study: &Study, x: &[f64]) -> Vec<f64> {
         let mut xi = study.inputs.to_standard(x);
-        let lowest = self.lowest_wind_germ.get_or_init(|| {
+        let held = self.lowest_wind_germ.get_or_init(|| {
             let [lowest, _] = self.calibrated_range(study, WIND_SPEED).ok()?;
             let index = study.inputs.index_of(WIND_SPEED).ok()?;
-            Some(study.inputs.inputs[index].marginal.to_standard(lowest)).filter(|g| g.is_finite())
+            let germ = study.inputs.inputs[index].marginal.to_standard(lowest);
+            germ.is_finite().then_some(HeldGerm { index, germ })
         });
-        if let (Some(lowest), Ok(index)) = (*lowest, study.inputs.index_of(WIND_SPEED)) {
-            xi[index] = xi[index].max(lowest);
+        if let Some(HeldGerm { index, germ }) = *held {
+            xi[index] = xi[index].max(germ);
         }
         xi
     }
 
-    /// The NARX coefficients of every mode at a physical input sample.
-    pub fn coefficients(&self, study: &Study, x: &[f64]) -> Vec<Vec<f64>> {
-        let xi = self.germ(study, x);
+    /// The NARX coefficients of every mode at a sample's germ ([`Metamodel::germ`]).
+    pub fn coefficients(&self, xi: &[f64]) -> Vec<Vec<f64>> {
         self.models
             .iter()
             .map(|m| {
-                let phi: Vec<f64> = m.coefficients.iter().map(|pce| pce.evaluate(&xi)).collect();
+                let phi: Vec<f64> = m.coefficients.iter().map(|pce| pce.evaluate(xi)).collect();
                 m.parametrization.inverse(&m.terms, &phi)
             })
             .collect()

@@ -25,7 +25,7 @@ impl Metamodel {
             .enumerate()
             .map(|(m, model)| model.static_response.evaluate(&xi, forces.mean(m)))
             .collect();
-        Ok((levels, self.coefficients(study, x)))
+        Ok((levels, self.coefficients(&xi)))
     }
 
     /// Free-runs every mode on the sample's modal forces; modal displacement histories (m). A
