@@ -325,7 +325,7 @@ fn every_response_is_sampled() {
 }
 
 /// Below the calibration design's lowest wind speed the wind's germ is held at that speed's (the
-/// Fréchet germ is −11 at 12 m/s, where the expansions mean nothing and free runs diverged), while
+/// Fréchet germ is −227 at 12 m/s, where the expansions mean nothing and free runs diverged), while
 /// the storm's own forces carry the load's fall: the metamodel answers at 12 m/s and its peaks
 /// follow the reference's. Above the design the germ is the marginal's.
 #[test]
