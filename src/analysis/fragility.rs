@@ -4,7 +4,7 @@
 
 use super::exceedance::{check_confidence, clopper_pearson};
 use super::hazard::WIND_SPEED;
-use super::sampling::check_samples;
+use super::sampling::{DivergedStorm, check_samples, name_diverged};
 use super::{Draws, OnDivergence, Response, check_thresholds, peaks_at};
 use crate::error::{Error, Result};
 use crate::optimise::nelder_mead;
@@ -94,6 +94,9 @@ pub struct Fragility {
     /// Storms whose metamodel free run diverged or had no stable rest, per speed: counted as
     /// exceeding every threshold, and the speed left out of the lognormal fits.
     pub diverged_storms: Vec<usize>,
+    /// The first few diverged storms with their inputs.
+    #[serde(default)]
+    pub first_diverged: Vec<DivergedStorm>,
 }
 
 /// The fragility curves of the peaks `peaks_of` returns for rows (inputs, storm stream).
@@ -118,6 +121,8 @@ pub fn fragility(
     let storms: Vec<usize> = (0..rows.len()).map(|i| i % n).collect();
     let peaks = peaks_of(&rows, &storms)?;
     let diverged: Vec<usize> = peaks.chunks(n).map(|p| p.iter().filter(|y| y.is_infinite()).count()).collect();
+    let mut first_diverged = Vec::new();
+    name_diverged(inputs, &rows, storms.iter().copied(), &peaks, &mut first_diverged);
     // The fit only over the speeds where the metamodel ran every storm: where some diverged it
     // extrapolates, and counting them as exceeding would bend the fitted curve.
     let sound: Vec<usize> = (0..diverged.len()).filter(|&j| diverged[j] == 0).collect();
@@ -150,6 +155,7 @@ pub fn fragility(
         confidence: options.confidence,
         calibrated_wind_range: calibrated,
         diverged_storms: diverged,
+        first_diverged,
     })
 }
 

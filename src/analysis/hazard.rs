@@ -4,7 +4,7 @@
 
 use super::climate::{annual_probability_of_period, period_of_annual_probability};
 use super::exceedance::{automatic_thresholds, check_confidence};
-use super::sampling::{Draws, OnDivergence, check_samples, peaks_at};
+use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, name_diverged, peaks_at};
 use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
 use super::{Response, check_thresholds};
 use crate::error::{Error, Result};
@@ -140,6 +140,9 @@ pub struct HazardCurve {
     /// inputs, as a rule):
     /// counted as exceeding every threshold.
     pub diverged_storms: usize,
+    /// The first few diverged storms with their inputs.
+    #[serde(default)]
+    pub first_diverged: Vec<DivergedStorm>,
     pub samples: usize,
     pub strata: usize,
     pub sampling: Sampling,
@@ -186,7 +189,7 @@ pub fn hazard_curve(
         Sampling::MonteCarlo => WindStrata::monte_carlo(),
     };
     let mut rng = rng_from_seed(options.seed);
-    let (mut run, mut diverged) = (0, 0);
+    let (mut run, mut diverged, mut first_diverged) = (0, 0, Vec::new());
     let mut stage = |counts: &[usize]| -> Result<(Vec<f64>, Vec<bool>)> {
         let speeds = strata.speeds(&options.climate, counts, &mut rng);
         if let Some(&v) = speeds.iter().find(|v| WindLoads::check_speed(**v).is_err()) {
@@ -197,8 +200,9 @@ pub fn hazard_curve(
             row[wind] = v;
         }
         let peaks = peaks_of(&rows, run)?;
-        run += rows.len();
         diverged += peaks.iter().filter(|p| p.is_infinite()).count();
+        name_diverged(inputs, &rows, run.., &peaks, &mut first_diverged);
+        run += rows.len();
         Ok((peaks, speeds.iter().map(|v| !(calibrated[0]..=calibrated[1]).contains(v)).collect()))
     };
     let pilot_share = if strata.count() == 1 { 1 } else { 4 };
@@ -246,6 +250,7 @@ pub fn hazard_curve(
         climate_beyond_calibrated_range: climate.cdf(calibrated[0]) + climate.survival(calibrated[1]),
         unsampled_probability: strata.unsampled(),
         diverged_storms: diverged,
+        first_diverged,
         samples: run,
         strata: strata.count(),
         sampling: options.sampling,
@@ -307,6 +312,7 @@ pub fn metamodel_hazard(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::analysis::sampling::NAMED_DIVERGED_STORMS;
     use crate::uncertainty::Input;
     use statrs::distribution::Continuous;
 
@@ -423,6 +429,37 @@ mod tests {
         let beta = r.beta.unwrap();
         assert!((beta + Normal::standard().inverse_cdf(r.annual_probability)).abs() < 1e-12);
         assert!(r.beta_lower.unwrap() < beta && beta < r.beta_upper.unwrap());
+    }
+
+    /// Storms that diverge (here, in a toy, every storm above 40 m/s) are counted and the first
+    /// five named with the inputs they were run with, in the order they ran.
+    #[test]
+    fn diverged_storms_are_counted_and_the_first_named_with_their_inputs() {
+        let options = HazardOptions {
+            climate: Marginal::Frechet { mean: 30.0, sd: 3.5 },
+            samples: 2_000,
+            seed: 3,
+            thresholds: None,
+            return_periods: vec![10.0],
+            limit: None,
+            confidence: 0.95,
+            sampling: Sampling::MonteCarlo,
+        };
+        let mut ran = Vec::new();
+        let curve = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], |rows, first| {
+            ran.extend(rows.iter().enumerate().map(|(i, r)| (first + i, r.clone())));
+            Ok(rows.iter().map(|r| if r[1] > 40.0 { f64::INFINITY } else { r[1] }).collect())
+        })
+        .unwrap();
+        let diverged: Vec<_> = ran.iter().filter(|(_, r)| r[1] > 40.0).collect();
+        assert!(diverged.len() > NAMED_DIVERGED_STORMS, "{} diverged", diverged.len());
+        assert_eq!(curve.diverged_storms, diverged.len());
+        let named: Vec<_> =
+            curve.first_diverged.iter().map(|d| (d.storm, vec![d.inputs["z"], d.inputs[WIND_SPEED]])).collect();
+        let expected: Vec<_> = diverged.iter().take(NAMED_DIVERGED_STORMS).map(|(k, r)| (*k, r.clone())).collect();
+        assert_eq!(named, expected);
+        let line = crate::analysis::describe_diverged(&curve.first_diverged);
+        assert!(line.starts_with(&format!("storm {} (wind_speed = ", expected[0].0)), "{line}");
     }
 
     #[test]

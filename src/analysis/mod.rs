@@ -35,7 +35,9 @@ pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validatio
 pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
 pub use reference::{reference_history, reference_peak};
 pub use response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_GRAVITY};
-pub use sampling::{Draws, MAX_SAMPLES, OnDivergence, check_samples, metamodel_peaks, peaks_at};
+pub use sampling::{
+    DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, check_samples, describe_diverged, metamodel_peaks, peaks_at,
+};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;
 pub use validated_responses::ResponseValidation;

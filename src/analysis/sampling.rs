@@ -12,6 +12,8 @@ use crate::surrogate::{BatchInput, BatchWorkspace, Metamodel, ModalScales, Reduc
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use crate::wind::{self, ForceSource};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 /// Most samples one sampling request may ask for.
@@ -63,6 +65,49 @@ pub enum OnDivergence {
     /// Its peak is taken as infinite: it exceeds every threshold (conservative; counted and reported
     /// by the analyses that allow it).
     Exceed,
+}
+
+/// At most this many diverged storms are named in an answer.
+pub const NAMED_DIVERGED_STORMS: usize = 5;
+
+/// A storm whose metamodel free run diverged, named with its inputs so that a user can tell an
+/// extrapolation far outside the calibrated inputs from a defect.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct DivergedStorm {
+    /// The storm stream its wind was drawn from (with the analysis's seed, it reruns the storm).
+    pub storm: usize,
+    /// Its physical inputs, by name.
+    pub inputs: BTreeMap<String, f64>,
+}
+
+impl std::fmt::Display for DivergedStorm {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let inputs: Vec<String> = self.inputs.iter().map(|(name, value)| format!("{name} = {value:.4e}")).collect();
+        write!(f, "storm {} ({})", self.storm, inputs.join(", "))
+    }
+}
+
+/// Named diverged storms on one line, for a report.
+pub fn describe_diverged(storms: &[DivergedStorm]) -> String {
+    storms.iter().map(ToString::to_string).collect::<Vec<_>>().join("; ")
+}
+
+/// Appends to `named`, up to [`NAMED_DIVERGED_STORMS`], the rows whose peak is infinite, with
+/// their storm streams.
+pub fn name_diverged(
+    inputs: &InputModel,
+    rows: &[Vec<f64>],
+    storms: impl IntoIterator<Item = usize>,
+    peaks: &[f64],
+    named: &mut Vec<DivergedStorm>,
+) {
+    let diverged = rows.iter().zip(storms).zip(peaks).filter(|(_, peak)| peak.is_infinite());
+    let room = NAMED_DIVERGED_STORMS.saturating_sub(named.len());
+    named.extend(diverged.take(room).map(|((row, storm), _)| DivergedStorm {
+        storm,
+        inputs: inputs.names().map(str::to_string).zip(row.iter().copied()).collect(),
+    }));
 }
 
 /// Peaks of `response` for every row of `draws`, in parallel by batches of [`LANES`], reporting

@@ -108,6 +108,9 @@ fn table(result: &Fragility, what: &str, unit: &str, seconds: f64) -> String {
             result.samples_per_speed
         );
     }
+    if !result.first_diverged.is_empty() {
+        out += &format!("the first diverged: {}\n", crate::analysis::describe_diverged(&result.first_diverged));
+    }
     out += &format!(
         "calibrated wind speeds {:.1}-{:.1} m/s\n",
         result.calibrated_wind_range[0], result.calibrated_wind_range[1]

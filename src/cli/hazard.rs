@@ -135,6 +135,14 @@ fn table(curve: &HazardCurve, what: &str, unit: &str, seconds: f64) -> String {
             r.beta.map_or("-".into(), |b| format!("{b:.3}"))
         );
     }
+    if curve.diverged_storms > 0 {
+        out += &format!(
+            "{} of {} storms diverged (counted as exceeding every threshold); the first: {}\n",
+            curve.diverged_storms,
+            curve.samples,
+            crate::analysis::describe_diverged(&curve.first_diverged)
+        );
+    }
     out += &format!(
         "calibrated wind speeds {:.1}-{:.1} m/s; the climate's probability outside them {:.2e}\n",
         curve.calibrated_wind_range[0], curve.calibrated_wind_range[1], curve.climate_beyond_calibrated_range

@@ -122,12 +122,25 @@ pub struct StageSeconds {
     pub total: f64,
 }
 
-/// An input whose germ is held from below: its index and the lowest germ it takes.
+/// Where the wind speed's expansions are continued below the calibration design: the input's
+/// index and the design's lowest and median speeds with their germs.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub(super) struct HeldGerm {
+pub(super) struct LowWindContinuation {
     index: usize,
+    lowest: SpeedGerm,
+    median: SpeedGerm,
+}
+
+/// A wind speed (m/s) and its germ.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct SpeedGerm {
+    speed: f64,
     germ: f64,
 }
+
+/// The germ at which the expansions are evaluated, as a weighted sum of points: one point
+/// inside the design, two for a linear continuation below it.
+pub type Germ = Vec<(f64, Vec<f64>)>;
 
 /// A calibrated PC-NARX metamodel.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -141,11 +154,11 @@ pub struct Metamodel {
     pub modes: ModalBasis,
     pub models: Vec<ModeModel>,
     pub calibration: CalibrationSummary,
-    /// The wind speed's index and its germ at the calibration design's lowest speed, found once
-    /// (see [`Metamodel::germ`]); `None` where the study has no random wind speed.
+    /// Where the wind speed's expansions are continued below the design, found once (see
+    /// [`Metamodel::germ`]); `None` where the study has no random wind speed.
     #[serde(skip)]
     #[cfg_attr(feature = "openapi", schema(ignore))]
-    pub(super) lowest_wind_germ: OnceLock<Option<HeldGerm>>,
+    pub(super) low_wind: OnceLock<Option<LowWindContinuation>>,
 }
 
 impl Metamodel {
@@ -188,40 +201,61 @@ impl Metamodel {
         Ok([values.clone().fold(f64::INFINITY, f64::min), values.fold(f64::NEG_INFINITY, f64::max)])
     }
 
-    /// The expansions' germ at a physical sample: every input's ξ from its marginal, except a
-    /// wind speed below the calibration design's lowest, whose ξ is held at that speed's. The
-    /// Fréchet germ's lower tail is so thin that ξ is −21 at 18 m/s, where a polynomial of degree
-    /// 3 to 5 means nothing (validation failed at 20 and 10 m/s); held, the coefficients are those
-    /// of the lowest calibrated wind while the deviation force and the static gain times the
-    /// sample's own mean force carry the load's fall exactly (median peak error 0.9 % at 20 m/s,
-    /// 2.5 % at 10 m/s from a design starting at 24 m/s). Above the design the expansions
-    /// extrapolate: the upper tail's germ grows slowly, and holding it there measured worse
-    /// (2.4 % against 0.6 % at 60 m/s). docs/method.md has the measurements.
+    /// The expansions' germ at a physical sample: every input's ξ from its marginal, except for a
+    /// wind speed below the calibration design's lowest. The Fréchet germ's lower tail is so thin
+    /// that ξ is −21 at 18 m/s, where a polynomial of degree 3 to 5 means nothing (validation
+    /// failed at 20 and 10 m/s). There every expansion is continued linearly in ln v along the
+    /// secant from the design's median speed to its lowest, the other inputs' germs the sample's:
+    /// the load falls as v² and the dampers' equivalent damping, a power of the amplitude, is
+    /// linear in ln v, and so are the logarithmic coefficients the expansions are of. Measured
+    /// from a design starting at 24 m/s (docs/method.md): median peak error 0.9 % at 10 m/s,
+    /// against 2.5 % with the coefficients held at the lowest speed's. Above the design the germ
+    /// grows slowly (the upper tail is heavy) and the expansions extrapolate as they are.
     ///
-    /// The held germ is found once per metamodel, from its design (the design is a function of
-    /// the calibration's options).
-    pub fn germ(&self, study: &Study, x: &[f64]) -> Vec<f64> {
-        let mut xi = study.inputs.to_standard(x);
-        let held = self.lowest_wind_germ.get_or_init(|| {
-            let [lowest, _] = self.calibrated_range(study, WIND_SPEED).ok()?;
-            let index = study.inputs.index_of(WIND_SPEED).ok()?;
-            let germ = study.inputs.inputs[index].marginal.to_standard(lowest);
-            germ.is_finite().then_some(HeldGerm { index, germ })
-        });
-        if let Some(HeldGerm { index, germ }) = *held {
-            xi[index] = xi[index].max(germ);
+    /// The continuation's two speeds are found once per metamodel, from its design (the design
+    /// is a function of the calibration's options).
+    pub fn germ(&self, study: &Study, x: &[f64]) -> Germ {
+        let xi = study.inputs.to_standard(x);
+        let continuation = self.low_wind.get_or_init(|| self.low_wind_continuation(study));
+        match *continuation {
+            Some(LowWindContinuation { index, lowest, median }) if x[index] < lowest.speed => {
+                let toward_median = (x[index] / lowest.speed).ln() / (median.speed / lowest.speed).ln();
+                let mut at_lowest = xi.clone();
+                at_lowest[index] = lowest.germ;
+                let mut at_median = xi;
+                at_median[index] = median.germ;
+                vec![(1.0 - toward_median, at_lowest), (toward_median, at_median)]
+            }
+            _ => vec![(1.0, xi)],
         }
-        xi
+    }
+
+    /// The lowest and median wind speeds of the design, with their germs (see [`Metamodel::germ`]).
+    fn low_wind_continuation(&self, study: &Study) -> Option<LowWindContinuation> {
+        let index = study.inputs.index_of(WIND_SPEED).ok()?;
+        let mut speeds: Vec<f64> =
+            super::design(study, &self.calibration.options).ok()?.points.iter().map(|x| x[index]).collect();
+        speeds.sort_by(f64::total_cmp);
+        let marginal = &study.inputs.inputs[index].marginal;
+        let at = |speed: f64| SpeedGerm { speed, germ: marginal.to_standard(speed) };
+        let (lowest, median) = (at(*speeds.first()?), at(speeds[speeds.len() / 2]));
+        let usable = lowest.germ.is_finite() && median.germ.is_finite() && median.speed > lowest.speed;
+        usable.then_some(LowWindContinuation { index, lowest, median })
     }
 
     /// The NARX coefficients of every mode at a sample's germ ([`Metamodel::germ`]).
-    pub fn coefficients(&self, xi: &[f64]) -> Vec<Vec<f64>> {
+    pub fn coefficients(&self, germ: &Germ) -> Vec<Vec<f64>> {
         self.models
             .iter()
             .map(|m| {
-                let phi: Vec<f64> = m.coefficients.iter().map(|pce| pce.evaluate(xi)).collect();
+                let phi: Vec<f64> = m.coefficients.iter().map(|pce| blend(germ, |xi| pce.evaluate(xi))).collect();
                 m.parametrization.inverse(&m.terms, &phi)
             })
             .collect()
     }
+}
+
+/// An expansion's value at a germ: the weighted sum of its values at the germ's points.
+pub(super) fn blend(germ: &Germ, f: impl Fn(&[f64]) -> f64) -> f64 {
+    germ.iter().map(|(w, xi)| w * f(xi)).sum()
 }

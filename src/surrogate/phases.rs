@@ -375,6 +375,6 @@ pub fn assemble(
             modes: diagnostics,
             seconds,
         },
-        lowest_wind_germ: Default::default(),
+        low_wind: Default::default(),
     })
 }

@@ -18,14 +18,14 @@ impl Metamodel {
     /// Static levels and coefficients of one sample.
     fn sample(&self, study: &Study, x: &[f64], forces: &dyn ForceSource) -> Result<(Vec<f64>, Vec<Vec<f64>>)> {
         study.inputs.check_sample(x)?;
-        let xi = self.germ(study, x);
+        let germ = self.germ(study, x);
         let levels = self
             .models
             .iter()
             .enumerate()
-            .map(|(m, model)| model.static_response.evaluate(&xi, forces.mean(m)))
+            .map(|(m, model)| super::metamodel::blend(&germ, |xi| model.static_response.evaluate(xi, forces.mean(m))))
             .collect();
-        Ok((levels, self.coefficients(&xi)))
+        Ok((levels, self.coefficients(&germ)))
     }
 
     /// Free-runs every mode on the sample's modal forces; modal displacement histories (m). A
