@@ -432,6 +432,10 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
         notes.to_lowercase().contains("gumbel") && notes.contains("At the limit 0.2 m") && notes.contains("β ="),
         "{notes}"
     );
+    // The 1-year level is offered, and the part of the curve from extrapolated speeds is drawn.
+    assert_eq!(text_of(&browser, "#hazard-table tbody tr:first-child td:first-child").await, "1 year");
+    let series = "return document.querySelectorAll('#hazard-chart polyline[data-series]').length;";
+    assert_eq!(browser.execute(series, vec![]).await.unwrap(), json!(2));
     set_value(&browser, "#fragility-samples", "20").await;
     set_value(&browser, "#fragility-thresholds", "0.4, 0.6").await;
     click(&browser, "#fragility-form button[type=submit]").await;

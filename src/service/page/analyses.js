@@ -202,17 +202,25 @@ export async function hazard(event) {
     : '';
   $('#hazard-chart').replaceChildren(Charts.lines({
     title: `Annual exceedance: ${responseLabel(answer)}`, xLabel: `peak x (${unit})`, yLabel: 'annual probability of exceedance', yLog: true,
-    series: [{ name: `${answer.samples} storms`, x: answer.thresholds, y: answer.annual_probability, lower: answer.lower, upper: answer.upper }],
+    series: [
+      { name: `${answer.samples} storms`, x: answer.thresholds, y: answer.annual_probability, lower: answer.lower, upper: answer.upper },
+      { name: `of which from speeds outside the calibrated ${format(answer.calibrated_wind_range[0])}–${format(answer.calibrated_wind_range[1])} m/s`, x: answer.thresholds, y: answer.probability_beyond_calibrated_range },
+    ],
     describe: (s, i) => `x = ${format(s.x[i])} ${unit}: ${format(s.y[i])} a year [${format(s.lower[i])}, ${format(s.upper[i])}], return period ${s.y[i] > 0 && s.y[i] < 1 ? format(-1 / Math.log1p(-s.y[i])) : '–'} years`,
   }));
   $('#hazard-table').hidden = false;
   $('#hazard-table tbody').replaceChildren(...answer.return_levels.map((level) => {
     const row = document.createElement('tr');
-    row.insertCell().textContent = `${format(level.return_period_years)} years`;
+    row.insertCell().textContent = `${format(level.return_period_years)} ${level.return_period_years === 1 ? 'year' : 'years'}`;
     for (const value of [level.value, level.lower, level.upper]) row.insertCell().textContent = value === null || value === undefined ? 'beyond the samples' : `${format(value)} ${unit}`;
     return row;
   }));
-  $('#hazard-notes').textContent = `Calibrated wind speeds ${format(answer.calibrated_wind_range[0])}–${format(answer.calibrated_wind_range[1])} m/s; the climate's probability outside them ${format(answer.climate_beyond_calibrated_range)}. Climate: ${describeMarginal(answer.climate)}.`;
+  $('#hazard-notes').textContent = `Calibrated wind speeds ${format(answer.calibrated_wind_range[0])}–${format(answer.calibrated_wind_range[1])} m/s; the climate's probability outside them ${format(answer.climate_beyond_calibrated_range)}, where the metamodel extrapolates (the second curve: the part of each annual probability from those speeds). Climate: ${describeMarginal(answer.climate)}.${answer.diverged_storms ? ` ${answer.diverged_storms} storms diverged (counted as exceeding every threshold); the first: ${answer.first_diverged.map(describeDiverged).join('; ')}.` : ''}`;
+}
+
+/** A diverged storm with the inputs it was run with. */
+function describeDiverged(storm) {
+  return `storm ${storm.storm} (${Object.entries(storm.inputs).map(([name, value]) => `${name} = ${format(value)}`).join(', ')})`;
 }
 
 /**
