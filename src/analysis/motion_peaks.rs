@@ -24,7 +24,7 @@ mod gates;
 mod lane_models;
 
 use super::Response;
-use super::response::damper_below;
+use super::response::{damper_below, rms_stride};
 use crate::dynamics::power;
 use crate::error::{Error, Result};
 use crate::simd::{Kernel, LANES, Lanes, Vector, run_widest};
@@ -64,6 +64,13 @@ pub fn motion_sink(
                     response.check(&study.structure)?;
                     Target::acceleration(&lanes, &shapes.iter().map(|s| s[floor - 1]).collect::<Vec<_>>())
                 }
+                Response::RmsAcceleration { floor } => {
+                    response.check(&study.structure)?;
+                    let shape: Vec<f64> = shapes.iter().map(|s| s[floor - 1]).collect();
+                    let modal = lanes.inverse_masses.iter().zip(&shape).map(|(c, w)| c.map(|c| w * c)).collect();
+                    let stride = rms_stride(study.storm.time_step);
+                    Target::RmsAcceleration { shape, modal, stride, squares: [0.0; LANES], steps: 0, sampled: 0 }
+                }
                 Response::DamperForce { floor } => {
                     response.check(&study.structure)?;
                     Target::DamperForce { damper: damper_below(&study.structure, floor)? }
@@ -84,13 +91,15 @@ pub fn motion_sink(
         })
         .collect::<Result<_>>()?;
     let zero = [[0.0; LANES]; MAX_MODES];
-    let accelerations = responses.iter().any(|r| matches!(r, Response::Acceleration { .. }));
+    let accelerations = responses.iter().any(Response::is_acceleration);
     let combinations = targets.iter().any(|t| matches!(t.target, Target::Combination { .. }));
     Ok(Box::new(MotionPeaks {
         time_step: study.storm.time_step,
         modes: lanes.inverse_masses.len(),
         lanes,
-        stepped: (0..targets.len()).filter(|&t| !matches!(targets[t].target, Target::Acceleration { .. })).collect(),
+        stepped: (0..targets.len())
+            .filter(|&t| matches!(targets[t].target, Target::Combination { .. } | Target::DamperForce { .. }))
+            .collect(),
         targets,
         rest: zero,
         previous: zero,
@@ -117,6 +126,10 @@ enum Target {
     /// damper force, and the bound's P and K_m (|N| ≤ P (Σ_m K_m |ŷ'_m|)^α).
     /// `gates`: which chunks and steps could beat each lane's running peak.
     Acceleration { shape: Vec<f64>, modal: Vec<Lanes>, bound: Lanes, k: Vec<Lanes>, gates: Box<Gates> },
+    /// A floor's RMS acceleration: Σ a² over every `stride`-th step of the storm so far, every
+    /// lane, a formed at each (its dampers' forces, which no bound can spare); the steps seen and
+    /// the steps sampled.
+    RmsAcceleration { shape: Vec<f64>, modal: Vec<Lanes>, stride: usize, squares: Lanes, steps: usize, sampled: usize },
     /// A damper's force: the peak is c·max|v|^α, so only its fastest velocity is tracked.
     DamperForce { damper: usize },
     /// A combination Σ_m w_m y_m (displacement, drift, stroke): offsets Σ_m w_m level_m per lane
@@ -294,6 +307,7 @@ impl MotionPeaks {
                 Target::DamperForce { damper } => {
                     std::array::from_fn(|l| (coefficients[damper][l] * power(tracked.best[l], alpha)).abs())
                 }
+                Target::RmsAcceleration { squares, sampled, .. } => squares.map(|s| (s / sampled.max(1) as f64).sqrt()),
                 _ => tracked.best,
             })
             .collect()
@@ -342,7 +356,7 @@ impl MotionPeaks {
                     Target::DamperForce { damper } => {
                         (&self.lanes.velocity_map[*damper][..], [0.0; LANES], velocities, &velocity_range)
                     }
-                    Target::Acceleration { .. } => continue,
+                    Target::Acceleration { .. } | Target::RmsAcceleration { .. } => continue,
                 };
                 let (mut high, mut low) = (start, start);
                 for (m, g) in gains.iter().enumerate() {
@@ -393,10 +407,22 @@ impl MotionPeaks {
                 modes,
             };
             for Tracked { target, best } in &mut self.targets {
-                if let Target::Acceleration { shape, modal, bound, k, gates } = target {
-                    let floor = Floor { shape, modal, bound, k, gates };
-                    let work = (&mut self.forces[..], &mut self.exact, &mut self.scratch);
-                    reduce_acceleration(&self.lanes, &steps, floor, best, work);
+                match target {
+                    Target::Acceleration { shape, modal, bound, k, gates } => {
+                        let floor = Floor { shape, modal, bound, k, gates };
+                        let work = (&mut self.forces[..], &mut self.exact, &mut self.scratch);
+                        reduce_acceleration(&self.lanes, &steps, floor, best, work);
+                    }
+                    Target::RmsAcceleration { shape, modal, stride, squares, steps: seen, sampled } => {
+                        // The block's steps that are the storm's multiples of the stride.
+                        let first = (*stride - *seen % *stride) % *stride;
+                        let work = (&mut self.forces[..], &mut self.exact);
+                        let sampling = (first, *stride);
+                        *sampled +=
+                            sum_squared_accelerations(&self.lanes, &steps, (shape, modal), sampling, squares, work);
+                        *seen += count;
+                    }
+                    _ => {}
                 }
             }
             linear.clear();
@@ -515,6 +541,32 @@ fn reduce_acceleration(
             }
         }
     }
+}
+
+/// Adds to `squares` the squared acceleration a = L − N of the block's steps `first`,
+/// `first + stride`, … in every lane, the modal damper forces of each (step, lane) computed once
+/// and shared with the peaks' floors; returns how many steps it added.
+#[inline(always)]
+fn sum_squared_accelerations(
+    lanes: &LaneModels,
+    steps: &Steps,
+    (shape, modal): (&[f64], &[Lanes]),
+    (first, stride): (usize, usize),
+    squares: &mut Lanes,
+    (forces, exact): (&mut [f64], &mut ExactSteps),
+) -> usize {
+    let Steps { velocities, linear, modes, .. } = *steps;
+    let sampled = (first..velocities.len() / modes).step_by(stride);
+    let count = sampled.len();
+    for i in sampled {
+        for (l, square) in squares.iter_mut().enumerate() {
+            let x: f64 = (0..modes).map(|m| shape[m] * linear[i * modes + m][l]).sum();
+            let g = exact.modal_forces(i, l, velocities, lanes, forces);
+            let a = x - modal.iter().zip(g).map(|(modal, g)| modal[l] * g).sum::<f64>();
+            *square = a.mul_add(a, *square);
+        }
+    }
+    count
 }
 
 /// In `candidates` (cleared first), (bound, step, L) of the steps of lane l's chunk from step `first` that the

@@ -10,9 +10,9 @@ use crate::dynamics::SampleModel;
 use crate::error::{Error, Result};
 use crate::study::{StormRun, Study};
 
-/// The peak of `response` in the reference run `run` of inputs `x`.
+/// The peak (for an RMS acceleration, the RMS) of `response` in the reference run `run` of inputs `x`.
 pub fn reference_peak(study: &Study, x: &[f64], run: &StormRun, response: Response) -> Result<f64> {
-    Ok(reference_history(study, x, run, response)?.iter().fold(0.0, |m, v| m.max(v.abs())))
+    Ok(response.of_history(&reference_history(study, x, run, response)?, study.storm.time_step))
 }
 
 /// The history of `response` in the reference run `run` of inputs `x`; a damper group's envelope
@@ -30,7 +30,7 @@ pub fn reference_history(study: &Study, x: &[f64], run: &StormRun, response: Res
         let shapes: Vec<Vec<f64>> =
             (0..modes.count()).map(|m| (0..structure.floors()).map(|f| modes.shapes[(f, m)]).collect()).collect();
         let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
-        return response.history(&ResponseView::new(&shapes, structure, motion, &model, forces));
+        return response.history(&ResponseView::new(&shapes, structure, motion, &model, forces, study.storm.time_step));
     }
     let Some(full) = &run.floor_motion else {
         return Err(Error::Internal("a reference run without its histories".into()));
@@ -42,7 +42,7 @@ pub fn reference_history(study: &Study, x: &[f64], run: &StormRun, response: Res
     Ok(match response {
         Response::Displacement { .. } => at(floor).to_vec(),
         Response::Drift { .. } => storey(floor),
-        Response::Acceleration { .. } => full.accelerations[floor - 1].clone(),
+        Response::Acceleration { .. } | Response::RmsAcceleration { .. } => full.accelerations[floor - 1].clone(),
         Response::DamperStroke { .. } => {
             let cos = structure.dampers[damper_below(structure, floor)?].cos_angle;
             storey(floor).iter().map(|u| cos * u).collect()

@@ -12,6 +12,18 @@ use std::cell::OnceCell;
 /// Standard gravity (m/s²), for accelerations in milli-g.
 pub const STANDARD_GRAVITY: f64 = 9.806_65;
 
+/// The interval (s) at which an RMS acceleration samples the storm's acceleration. Every step's
+/// acceleration needs every damper's force (a power each), which at 100 Hz made a metamodel's RMS
+/// eighty times as costly as its peak; sampled at 10 Hz, nine samples a period of the highest
+/// retained mode (7 rad/s), the RMS of reference storms moved by at most 1.1·10⁻⁴ (six histories,
+/// docs/method.md). Reference and metamodel sample alike, so they are compared on one definition.
+pub const RMS_SAMPLING_INTERVAL_S: f64 = 0.1;
+
+/// Every how many steps of `time_step` (s) an RMS acceleration samples the storm.
+pub fn rms_stride(time_step: f64) -> usize {
+    ((RMS_SAMPLING_INTERVAL_S / time_step).round() as usize).max(1)
+}
+
 /// A response history of the building: of one floor, or for the dampers the envelope of a
 /// coefficient group (at every instant the largest magnitude among its dampers, so its peak is the
 /// largest of their peaks: what devices made alike are designed for).
@@ -24,6 +36,9 @@ pub enum Response {
     Drift { floor: usize },
     /// Floor acceleration (the ground does not move, so relative and absolute agree), m/s².
     Acceleration { floor: usize },
+    /// Root mean square of a floor's acceleration over the storm, m/s²: the quantity of
+    /// ISO 6897-type comfort criteria. Its "peak" (the one value per storm) is the RMS.
+    RmsAcceleration { floor: usize },
     /// Axial force of the damper in the storey below the floor, N.
     DamperForce { floor: usize },
     /// Axial elongation of that damper's brace from the unloaded frame, cos θ·(u_floor − u_{floor−1}), m.
@@ -46,6 +61,8 @@ pub enum ResponseKind {
     Drift,
     /// Floor acceleration (m/s²), from the equations of motion of the reduced model.
     Acceleration,
+    /// Root mean square of the floor acceleration over the storm (m/s²).
+    RmsAcceleration,
     /// Axial force of the damper in the storey below the floor, or the largest of a group's (N).
     DamperForce,
     /// Axial elongation of that damper's brace, or the largest of a group's (m).
@@ -54,10 +71,11 @@ pub enum ResponseKind {
 
 impl ResponseKind {
     /// Every kind, in the order tables list them.
-    pub const ALL: [ResponseKind; 5] = [
+    pub const ALL: [ResponseKind; 6] = [
         ResponseKind::Displacement,
         ResponseKind::Drift,
         ResponseKind::Acceleration,
+        ResponseKind::RmsAcceleration,
         ResponseKind::DamperForce,
         ResponseKind::DamperStroke,
     ];
@@ -68,6 +86,7 @@ impl ResponseKind {
             ResponseKind::Displacement => "displacement",
             ResponseKind::Drift => "drift",
             ResponseKind::Acceleration => "acceleration",
+            ResponseKind::RmsAcceleration => "rms_acceleration",
             ResponseKind::DamperForce => "damper_force",
             ResponseKind::DamperStroke => "damper_stroke",
         }
@@ -88,6 +107,7 @@ impl ResponseKind {
             ResponseKind::Displacement => Response::Displacement { floor },
             ResponseKind::Drift => Response::Drift { floor },
             ResponseKind::Acceleration => Response::Acceleration { floor },
+            ResponseKind::RmsAcceleration => Response::RmsAcceleration { floor },
             ResponseKind::DamperForce => Response::DamperForce { floor },
             ResponseKind::DamperStroke => Response::DamperStroke { floor },
         }
@@ -158,6 +178,7 @@ impl Response {
             Response::Displacement { floor }
             | Response::Drift { floor }
             | Response::Acceleration { floor }
+            | Response::RmsAcceleration { floor }
             | Response::DamperForce { floor }
             | Response::DamperStroke { floor } => Some(floor),
             Response::GroupDamperForce { .. } | Response::GroupDamperStroke { .. } => None,
@@ -169,6 +190,7 @@ impl Response {
             Response::Displacement { .. } => ResponseKind::Displacement,
             Response::Drift { .. } => ResponseKind::Drift,
             Response::Acceleration { .. } => ResponseKind::Acceleration,
+            Response::RmsAcceleration { .. } => ResponseKind::RmsAcceleration,
             Response::DamperForce { .. } | Response::GroupDamperForce { .. } => ResponseKind::DamperForce,
             Response::DamperStroke { .. } | Response::GroupDamperStroke { .. } => ResponseKind::DamperStroke,
         }
@@ -192,7 +214,7 @@ impl Response {
     /// The SI unit of the response's values.
     pub fn unit(&self) -> &'static str {
         match self {
-            Response::Acceleration { .. } => "m/s²",
+            Response::Acceleration { .. } | Response::RmsAcceleration { .. } => "m/s²",
             Response::DamperForce { .. } | Response::GroupDamperForce { .. } => "N",
             _ => "m",
         }
@@ -201,7 +223,7 @@ impl Response {
     /// The unit as a suffix of a column name: `m`, `m_s2` or `n`.
     pub fn unit_tag(&self) -> &'static str {
         match self {
-            Response::Acceleration { .. } => "m_s2",
+            Response::Acceleration { .. } | Response::RmsAcceleration { .. } => "m_s2",
             Response::DamperForce { .. } | Response::GroupDamperForce { .. } => "n",
             _ => "m",
         }
@@ -213,6 +235,7 @@ impl Response {
             Response::Displacement { floor } => format!("displacement of floor {floor}"),
             Response::Drift { floor } => format!("drift below floor {floor}"),
             Response::Acceleration { floor } => format!("acceleration of floor {floor}"),
+            Response::RmsAcceleration { floor } => format!("RMS acceleration of floor {floor}"),
             Response::DamperForce { floor } => format!("force of the damper below floor {floor}"),
             Response::DamperStroke { floor } => format!("stroke of the damper below floor {floor}"),
             Response::GroupDamperForce { group } => format!("largest force among the dampers of group {group}"),
@@ -238,6 +261,7 @@ impl Response {
             Response::Displacement { floor }
             | Response::Drift { floor }
             | Response::Acceleration { floor }
+            | Response::RmsAcceleration { floor }
             | Response::DamperForce { floor }
             | Response::DamperStroke { floor } => floor,
         };
@@ -274,8 +298,28 @@ impl Response {
         })
     }
 
-    /// The response's history in a sample's motion; a group's envelope is, step by step, the
-    /// largest magnitude among its dampers.
+    /// Whether this response is a floor's acceleration, peak or RMS: from the equations of motion.
+    pub fn is_acceleration(&self) -> bool {
+        matches!(self, Response::Acceleration { .. } | Response::RmsAcceleration { .. })
+    }
+
+    /// The one value per storm of this response's `history` of steps of `time_step` (s): for an
+    /// RMS acceleration the RMS of every [`rms_stride`]-th step from the first, otherwise the peak
+    /// absolute value.
+    pub fn of_history(&self, history: &[f64], time_step: f64) -> f64 {
+        match self {
+            Response::RmsAcceleration { .. } => {
+                let sampled = history.iter().step_by(rms_stride(time_step));
+                let count = sampled.clone().count().max(1);
+                (sampled.map(|a| a * a).sum::<f64>() / count as f64).sqrt()
+            }
+            _ => history.iter().fold(0.0, |m, v| m.max(v.abs())),
+        }
+    }
+
+    /// The response's history in a sample's motion (for an RMS acceleration, the acceleration
+    /// whose RMS it is); a group's envelope is, step by step, the largest magnitude among its
+    /// dampers.
     pub fn history(&self, view: &ResponseView) -> Result<Vec<f64>> {
         let combine = |modal: &[Vec<f64>], weights: &[f64]| -> Vec<f64> {
             let steps = modal.first().map_or(0, Vec::len);
@@ -285,7 +329,7 @@ impl Response {
             return Ok(combine(&view.motion.displacements, &weights));
         }
         Ok(match *self {
-            Response::Acceleration { floor } => {
+            Response::Acceleration { floor } | Response::RmsAcceleration { floor } => {
                 let weights: Vec<f64> = view.shapes.iter().map(|s| s[floor - 1]).collect();
                 combine(view.modal_accelerations(), &weights)
             }
@@ -296,7 +340,7 @@ impl Response {
         })
     }
 
-    /// Peak absolute value over the storm.
+    /// Peak absolute value over the storm (the RMS for an RMS acceleration).
     pub fn peak(&self, view: &ResponseView) -> Result<f64> {
         match *self {
             Response::DamperForce { floor } => {
@@ -306,7 +350,7 @@ impl Response {
             Response::GroupDamperForce { .. } | Response::GroupDamperStroke { .. } => {
                 self.members(view.structure)?.iter().try_fold(0.0, |m: f64, r| Ok(m.max(r.peak(view)?)))
             }
-            _ => Ok(self.history(view)?.iter().fold(0.0, |m, v| m.max(v.abs()))),
+            _ => Ok(self.of_history(&self.history(view)?, view.time_step)),
         }
     }
 }
@@ -341,6 +385,8 @@ pub struct ResponseView<'a> {
     pub motion: &'a ModalMotion,
     pub model: &'a SampleModel<'a>,
     pub forces: &'a ModalForces,
+    /// The storm's time step (s).
+    pub time_step: f64,
     accelerations: OnceCell<Vec<Vec<f64>>>,
 }
 
@@ -351,8 +397,9 @@ impl<'a> ResponseView<'a> {
         motion: &'a ModalMotion,
         model: &'a SampleModel<'a>,
         forces: &'a ModalForces,
+        time_step: f64,
     ) -> Self {
-        ResponseView { shapes, structure, motion, model, forces, accelerations: OnceCell::new() }
+        ResponseView { shapes, structure, motion, model, forces, time_step, accelerations: OnceCell::new() }
     }
 
     fn modal_accelerations(&self) -> &[Vec<f64>] {

@@ -1,5 +1,6 @@
 //! The responses a validation judges a metamodel by: the roof displacement, the largest drift, the
-//! roof acceleration and the largest damper force, each compared peak for peak with the reference.
+//! roof acceleration (peak and RMS) and the largest damper force, each compared storm for storm
+//! with the reference.
 //!
 //! "Largest" is a floor, not an envelope: the floor (or damper) whose peak is largest on average
 //! over the reference samples, so that both models are compared on the same named response.
@@ -15,6 +16,7 @@ use serde::{Deserialize, Serialize};
 pub struct CheckedPeaks {
     roof_displacement: f64,
     roof_acceleration: f64,
+    roof_rms_acceleration: f64,
     /// Per floor, from the first.
     drifts: Vec<f64>,
     /// Per damper floor (the floors with a damper below), with the floor.
@@ -41,6 +43,7 @@ impl CheckedPeaks {
         Ok(CheckedPeaks {
             roof_displacement: Response::Displacement { floor: floors }.peak(view)?,
             roof_acceleration: Response::Acceleration { floor: floors }.peak(view)?,
+            roof_rms_acceleration: Response::RmsAcceleration { floor: floors }.peak(view)?,
             drifts,
             damper_forces,
         })
@@ -51,13 +54,16 @@ impl CheckedPeaks {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ResponseValidation {
-    /// `displacement`, `drift`, `acceleration` or `damper_force`.
+    /// `displacement`, `drift`, `acceleration`, `rms_acceleration` or `damper_force`.
     pub response: ResponseKind,
     pub floor: usize,
     /// Unit of the peaks: m, m/s² or N.
     pub unit: String,
-    /// Mean of the reference peaks.
+    /// Mean of the reference peaks (for `rms_acceleration`, of the RMS values).
     pub mean_reference_peak: f64,
+    /// Mean of the metamodel's peaks on the same storms: beside the reference's, the bias.
+    #[serde(default)]
+    pub mean_metamodel_peak: f64,
     pub peak_correlation: f64,
     pub median_peak_relative_error: f64,
     pub p95_peak_relative_error: f64,
@@ -72,7 +78,8 @@ impl ResponseValidation {
             response: kind,
             floor,
             unit: kind.at_floor(floor).unit().into(),
-            mean_reference_peak: reference.iter().sum::<f64>() / reference.len() as f64,
+            mean_reference_peak: mean(reference),
+            mean_metamodel_peak: mean(metamodel),
             peak_correlation: pearson(reference, metamodel),
             median_peak_relative_error: quantile(&errors, 0.5),
             p95_peak_relative_error: quantile(&errors, 0.95),
@@ -100,8 +107,13 @@ pub fn compare(reference: &[CheckedPeaks], metamodel: &[CheckedPeaks]) -> Vec<Re
         add(ResponseKind::Drift, i + 1, &|p| p.drifts[i]);
     }
     add(ResponseKind::Acceleration, floors, &|p| p.roof_acceleration);
+    add(ResponseKind::RmsAcceleration, floors, &|p| p.roof_rms_acceleration);
     if let Some(i) = largest(first.damper_forces.len(), &|p, i| p.damper_forces[i].1) {
         add(ResponseKind::DamperForce, first.damper_forces[i].0, &|p| p.damper_forces[i].1);
     }
     out
+}
+
+fn mean(values: &[f64]) -> f64 {
+    values.iter().sum::<f64>() / values.len() as f64
 }

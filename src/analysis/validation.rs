@@ -120,8 +120,10 @@ pub fn validate(
             let reference = reference.motion();
             let predicted = ModalMotion::from_displacements(predicted, study.storm.time_step);
             let structure = &study.structure;
-            let reference_view = ResponseView::new(shapes, structure, &reference, &model, &forces);
-            let metamodel_view = ResponseView::new(shapes, structure, &predicted, &model, &forces);
+            let reference_view =
+                ResponseView::new(shapes, structure, &reference, &model, &forces, study.storm.time_step);
+            let metamodel_view =
+                ResponseView::new(shapes, structure, &predicted, &model, &forces, study.storm.time_step);
             let (u, u_hat) = (roof.history(&reference_view)?, roof.history(&metamodel_view)?);
             let result = SampleResult {
                 reference: CheckedPeaks::of(&reference_view)?,

@@ -75,7 +75,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
         "lower",
         "upper"
     );
-    let milli_g = matches!(response, Response::Acceleration { .. });
+    let milli_g = response.is_acceleration();
     if milli_g {
         out.insert_str(out.len() - 1, &format!("  {:>10}", "x (milli-g)"));
     }

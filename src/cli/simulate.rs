@@ -120,7 +120,7 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
     out += "largest peaks up the height (every floor's in --json):\n";
     for (response, value) in &largest {
         out += &format!("  {:<45} {value:.5} {}", response.describe(), response.unit());
-        if let Response::Acceleration { .. } = response {
+        if response.is_acceleration() {
             out += &format!(" ({:.2} milli-g)", value / STANDARD_GRAVITY * 1e3);
         }
         out += "\n";
@@ -143,6 +143,12 @@ fn history_responses(args: &SimulateArgs, study: &Study) -> Result<Vec<Response>
     } else {
         args.histories.iter().map(|k| ResponseKind::parse(k)).collect::<Result<_>>()?
     };
+    if kinds.contains(&ResponseKind::RmsAcceleration) {
+        return Err(Error::invalid(
+            "history",
+            "an RMS acceleration is one value per storm (in the run's peaks); its history is `acceleration`",
+        ));
+    }
     let mut responses = Vec::new();
     for kind in kinds {
         match args.history_floors.as_deref().map(str::trim) {

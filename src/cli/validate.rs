@@ -71,16 +71,17 @@ pub fn validate(args: &ValidateArgs) -> Result<String> {
     }
     let modes: Vec<String> = report.mode_mean_relative_errors.iter().map(|e| format!("{e:.2e}")).collect();
     let mut responses = format!(
-        "{:<14} {:>5} {:>12} {:>11} {:>9} {:>9} {:>6}\n",
-        "response", "floor", "mean peak", "correlation", "median %", "p95 %", "gap"
+        "{:<16} {:>5} {:>12} {:>15} {:>11} {:>9} {:>9} {:>6}\n",
+        "response", "floor", "mean peak", "metamodel/ref.", "correlation", "median %", "p95 %", "gap"
     );
     for r in &report.responses {
         responses += &format!(
-            "{:<14} {:>5} {:>9.4} {:<4} {:>9.4} {:>9.2} {:>9.2} {:>6.3}\n",
+            "{:<16} {:>5} {:>9.4} {:<4} {:>15.4} {:>11.4} {:>9.2} {:>9.2} {:>6.3}\n",
             r.response.name(),
             r.floor,
             r.mean_reference_peak,
             r.unit,
+            r.mean_metamodel_peak / r.mean_reference_peak,
             r.peak_correlation,
             100.0 * r.median_peak_relative_error,
             100.0 * r.p95_peak_relative_error,

@@ -60,7 +60,7 @@ async fn calibrate_follow_fetch_and_sample() {
     assert_eq!(status, 200);
     assert_eq!((study["floors"].as_u64(), study["damper_groups"].as_u64()), (Some(40), Some(4)), "{study}");
     assert_eq!((study["duration_s"].as_f64(), study["time_step_s"].as_f64()), (Some(30.0), Some(0.01)));
-    assert_eq!(study["responses"].as_array().unwrap().len(), 5);
+    assert_eq!(study["responses"].as_array().unwrap().len(), 6);
     let studied = Study::from_spec(&spec).unwrap();
     let design = windmeta::surrogate::design(&studied, &options).unwrap().points;
     let inputs = study["inputs"].as_array().unwrap();

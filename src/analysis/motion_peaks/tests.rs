@@ -4,7 +4,8 @@ use crate::dynamics::{ModalMotion, SampleModel};
 use crate::wind::ModalForces;
 
 /// Fed synthetic scaled histories in uneven blocks (one longer than a window of chunks), the sink's peaks equal those of the same
-/// physical histories through [`SampleModel`] (every damper at every step), for damper laws
+/// physical histories through [`SampleModel`] (every damper at every step), RMS accelerations
+/// those of the histories' squares, for damper laws
 /// below, at and above α = 1 (the bound's two forms), in every lane; damper forces and
 /// combinations (drift, displacement), bounded a chunk at a time, too.
 #[test]
@@ -55,6 +56,8 @@ fn peaks_equal_those_of_every_step_for_any_exponent() {
         let responses = [
             Response::Acceleration { floor: floors },
             Response::Acceleration { floor: 9 },
+            Response::RmsAcceleration { floor: floors },
+            Response::RmsAcceleration { floor: 9 },
             Response::DamperForce { floor: 5 },
             Response::Drift { floor: 7 },
             Response::Displacement { floor: floors },
@@ -77,7 +80,8 @@ fn peaks_equal_those_of_every_step_for_any_exponent() {
                         .map(|m| (0..steps).map(|t| scales.inputs[m] * input(l, m, t)).collect())
                         .collect(),
                 };
-                let view = ResponseView::new(&shapes, &study.structure, &motion, &model, &forces);
+                let view =
+                    ResponseView::new(&shapes, &study.structure, &motion, &model, &forces, study.storm.time_step);
                 let expected = response.peak(&view).unwrap();
                 assert!(
                     (peak - expected).abs() <= 1e-9 * expected,

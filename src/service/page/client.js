@@ -20,8 +20,8 @@ export const session = {
   curves: { latest: null, kept: null },
 };
 
-export const UNITS = { displacement: 'm', drift: 'm', acceleration: 'm/s²', damper_force: 'N', damper_stroke: 'm' };
-export const UNIT_TAGS = { displacement: 'm', drift: 'm', acceleration: 'm_s2', damper_force: 'n', damper_stroke: 'm' };
+export const UNITS = { displacement: 'm', drift: 'm', acceleration: 'm/s²', rms_acceleration: 'm/s²', damper_force: 'N', damper_stroke: 'm' };
+export const UNIT_TAGS = { displacement: 'm', drift: 'm', acceleration: 'm_s2', rms_acceleration: 'm_s2', damper_force: 'n', damper_stroke: 'm' };
 
 /** A refused request: the problem document the API sent. */
 export class ApiProblem extends Error {

@@ -140,7 +140,7 @@ function showValidation(report) {
   $('#validation-result').hidden = false;
   $('#validation-table tbody').replaceChildren(...(report.responses || []).map((r) => {
     const row = document.createElement('tr');
-    const cells = [r.response, r.floor, format(r.peak_correlation), `${format(100 * r.median_peak_relative_error)} %`, `${format(100 * r.p95_peak_relative_error)} %`, format(r.max_exceedance_gap), `${format(r.mean_reference_peak)} ${r.unit}`];
+    const cells = [r.response, r.floor, format(r.peak_correlation), `${format(100 * r.median_peak_relative_error)} %`, `${format(100 * r.p95_peak_relative_error)} %`, format(r.max_exceedance_gap), `${format(r.mean_reference_peak)} ${r.unit}`, `${format(r.mean_metamodel_peak)} ${r.unit} (${format(r.mean_metamodel_peak / r.mean_reference_peak)}×)`];
     for (const cell of cells) row.insertCell().textContent = cell;
     return row;
   }));
