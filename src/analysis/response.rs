@@ -243,6 +243,14 @@ impl Response {
         }
     }
 
+    /// What one storm gives of it, for titles: "peak …", or the RMS acceleration as it is.
+    pub fn per_storm(&self) -> String {
+        match self {
+            Response::RmsAcceleration { .. } => self.describe(),
+            _ => format!("peak {}", self.describe()),
+        }
+    }
+
     /// Checks the floor, for a damper response that the storey has a damper, for a group's
     /// envelope that the group exists.
     pub fn check(&self, structure: &Structure) -> Result<()> {

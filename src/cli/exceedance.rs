@@ -57,17 +57,17 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     let seconds = started.elapsed().as_secs_f64();
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
     let curve = exceedance_curve(&peaks, &thresholds, args.confidence);
-    let what = response.describe();
+    let what = response.per_storm();
     if let (Some(path), Some(format)) = (&args.out, format) {
         let text = match format.as_str() {
             "csv" => csv_text(&curve, &response),
             "json" => serde_json::to_string_pretty(&json!({"response": response, "curve": curve, "seconds": seconds}))
                 .expect("plain JSON"),
-            _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("peak {what} x ({})", response.unit())),
+            _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("{what} x ({})", response.unit())),
         };
         write_out(path, &text)?;
     }
-    let mut out = format!("peak {what}: {} samples in {seconds:.2} s\n", args.sampling.samples);
+    let mut out = format!("{what}: {} samples in {seconds:.2} s\n", args.sampling.samples);
     out += &format!(
         "{:>12}  {:>10}  {:>10}  {:>10}\n",
         &format!("x ({})", response.unit()),

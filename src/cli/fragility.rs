@@ -66,15 +66,15 @@ pub fn fragility(args: &FragilityArgs) -> Result<String> {
     let started = Instant::now();
     let result = metamodel_fragility(&metamodel, &study, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
-    let what = response.describe();
+    let what = response.per_storm();
     let out = args.out.as_deref().zip(format);
-    let render = |_: &str| fragility_svg(&result, &format!("peak {what}"));
+    let render = |_: &str| fragility_svg(&result, &what);
     answer(&result, args.analysis.json, out, render, || table(&result, &what, response.unit(), seconds))
 }
 
 fn table(result: &Fragility, what: &str, unit: &str, seconds: f64) -> String {
     let mut out = format!(
-        "peak {what}: {} storms at each of {} speeds in {seconds:.2} s\n",
+        "{what}: {} storms at each of {} speeds in {seconds:.2} s\n",
         result.samples_per_speed,
         result.wind_speeds.len()
     );

@@ -76,13 +76,13 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
     let started = Instant::now();
     let curve = metamodel_hazard(&metamodel, &study, response, &options, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
-    let what = response.describe();
+    let what = response.per_storm();
     let out = args.out.as_deref().zip(format);
     let render = |format: &str| {
         if format == "csv" {
             curve.csv(response.unit_tag())
         } else {
-            hazard_svg(&curve, &format!("peak {what} x ({})", response.unit()))
+            hazard_svg(&curve, &format!("{what} x ({})", response.unit()))
         }
     };
     answer(&curve, args.analysis.json, out, render, || table(&curve, &what, response.unit(), seconds))
@@ -91,7 +91,7 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
 fn table(curve: &HazardCurve, what: &str, unit: &str, seconds: f64) -> String {
     let number = |x: Option<f64>| x.map_or("-".to_string(), |x| format!("{x:.5}"));
     let mut out = format!(
-        "annual peak {what}: {} storms in {} strata ({:?}) in {seconds:.2} s\n",
+        "annual {what}: {} storms in {} strata ({:?}) in {seconds:.2} s\n",
         curve.samples, curve.strata, curve.sampling
     );
     out += &format!(

@@ -93,9 +93,9 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
         return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
     }
     let mut out = format!(
-        "{}: peak {} of {} storms of {} s ({} inputs, seed {})\n",
+        "{}: {} of {} storms of {} s ({} inputs, seed {})\n",
         study.name,
-        response.describe(),
+        response.per_storm(),
         args.samples,
         study.storm.duration,
         if args.nominal { "nominal" } else { "random" },

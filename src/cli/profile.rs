@@ -52,7 +52,7 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
         metamodel_profiles(&metamodel, &study, &inputs, args.sampling.samples, seed, kind, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let profile = samples.quantile_profile(args.quantile, args.analysis.confidence)?;
-    let label = format!("peak {} ({})", kind.name().replace('_', " "), profile.unit);
+    let label = format!("{} ({})", kind.at_floor(1).per_storm().replace(" of floor 1", ""), profile.unit);
     let out = args.out.as_deref().zip(format);
     answer(
         &profile,

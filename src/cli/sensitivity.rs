@@ -39,9 +39,10 @@ pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
     if args.analysis.json {
         return Ok(serde_json::to_string_pretty(&result).expect("plain JSON"));
     }
+    let unit = response.unit();
     let mut out = format!(
-        "peak {}: {} storms (N = {}) in {seconds:.2} s; mean {:.5} m, sd {:.5} m\n",
-        response.describe(),
+        "{}: {} storms (N = {}) in {seconds:.2} s; mean {:.5} {unit}, sd {:.5} {unit}\n",
+        response.per_storm(),
         result.evaluations,
         result.samples,
         result.mean,

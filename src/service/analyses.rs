@@ -326,10 +326,10 @@ impl AnalysisAnswer {
             (AnalysisAnswer::Hazard(a), Rendering::Csv) => ("text/csv", a.curve.csv(a.response.unit_tag())),
             (AnalysisAnswer::Hazard(a), Rendering::Svg) => (
                 "image/svg+xml",
-                hazard_svg(&a.curve, &format!("peak {} x ({})", a.response.describe(), a.response.unit())),
+                hazard_svg(&a.curve, &format!("{} x ({})", a.response.per_storm(), a.response.unit())),
             ),
             (AnalysisAnswer::Fragility(a), Rendering::Svg) => {
-                ("image/svg+xml", fragility_svg(&a.fragility, &format!("peak {}", a.response.describe())))
+                ("image/svg+xml", fragility_svg(&a.fragility, &a.response.per_storm()))
             }
             _ => ("application/json", serde_json::to_string(self).expect("an answer serialises")),
         }

@@ -184,7 +184,7 @@ impl ExceedanceAnswer {
                 ("text/csv", text)
             }
             Rendering::Svg => {
-                let label = format!("peak {} x ({})", self.response.describe(), self.response.unit());
+                let label = format!("{} x ({})", self.response.per_storm(), self.response.unit());
                 ("image/svg+xml", exceedance_svg(&[("PC-NARX", curve)], &label))
             }
         }

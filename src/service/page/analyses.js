@@ -167,7 +167,7 @@ export function drawExceedance() {
   const series = [curveSeries(latest), ...(kept ? [curveSeries(kept)] : [])];
   const chart = Charts.lines({
     title: `P(peak > x), ${latest.answer.samples} storms, ${format(100 * latest.answer.confidence)} % band`,
-    xLabel: `peak ${latest.answer.response.kind.replace('_', ' ')} x (${unit})`, yLabel: 'probability of exceedance', yLog: true, yMax: 1,
+    xLabel: `${latest.answer.response.kind === 'rms_acceleration' ? 'RMS acceleration' : `peak ${latest.answer.response.kind.replace('_', ' ')}`} x (${unit})`, yLabel: 'probability of exceedance', yLog: true, yMax: 1,
     series,
     describe: (s, i) => `${s.name}: x = ${format(s.x[i])} ${unit}, P = ${format(s.y[i])} [${format(s.lower[i])}, ${format(s.upper[i])}]`,
   });
@@ -201,7 +201,7 @@ export async function hazard(event) {
     ? `At the limit ${format(reliability.limit)} ${unit}: ${format(reliability.annual_probability)} a year [${format(reliability.lower)}, ${format(reliability.upper)}], β = ${reliability.beta === null ? (reliability.annual_probability > 0 ? '−∞' : '+∞') : format(reliability.beta)}.`
     : '';
   $('#hazard-chart').replaceChildren(Charts.lines({
-    title: `Annual exceedance: ${responseLabel(answer)}`, xLabel: `peak x (${unit})`, yLabel: 'annual probability of exceedance', yLog: true,
+    title: `Annual exceedance: ${responseLabel(answer)}`, xLabel: `${answer.response.kind === 'rms_acceleration' ? 'RMS' : 'peak'} x (${unit})`, yLabel: 'annual probability of exceedance', yLog: true,
     series: [
       { name: `${answer.samples} storms`, x: answer.thresholds, y: answer.annual_probability, lower: answer.lower, upper: answer.upper },
       { name: `of which from speeds outside the calibrated ${format(answer.calibrated_wind_range[0])}–${format(answer.calibrated_wind_range[1])} m/s`, x: answer.thresholds, y: answer.probability_beyond_calibrated_range },
