@@ -22,6 +22,7 @@
 mod exact;
 mod gates;
 mod lane_models;
+mod rms;
 
 use super::Response;
 use super::response::{damper_below, rms_stride};
@@ -33,6 +34,7 @@ use crate::surrogate::{ModalScales, MotionSink};
 use exact::ExactSteps;
 use gates::{Gate, Gates};
 use lane_models::LaneModels;
+use rms::sum_squared_accelerations;
 
 /// Steps whose bound is taken together before any of them is looked at one by one.
 const CHUNK: usize = 32;
@@ -541,32 +543,6 @@ fn reduce_acceleration(
             }
         }
     }
-}
-
-/// Adds to `squares` the squared acceleration a = L − N of the block's steps `first`,
-/// `first + stride`, … in every lane, the modal damper forces of each (step, lane) computed once
-/// and shared with the peaks' floors; returns how many steps it added.
-#[inline(always)]
-fn sum_squared_accelerations(
-    lanes: &LaneModels,
-    steps: &Steps,
-    (shape, modal): (&[f64], &[Lanes]),
-    (first, stride): (usize, usize),
-    squares: &mut Lanes,
-    (forces, exact): (&mut [f64], &mut ExactSteps),
-) -> usize {
-    let Steps { velocities, linear, modes, .. } = *steps;
-    let sampled = (first..velocities.len() / modes).step_by(stride);
-    let count = sampled.len();
-    for i in sampled {
-        for (l, square) in squares.iter_mut().enumerate() {
-            let x: f64 = (0..modes).map(|m| shape[m] * linear[i * modes + m][l]).sum();
-            let g = exact.modal_forces(i, l, velocities, lanes, forces);
-            let a = x - modal.iter().zip(g).map(|(modal, g)| modal[l] * g).sum::<f64>();
-            *square = a.mul_add(a, *square);
-        }
-    }
-    count
 }
 
 /// In `candidates` (cleared first), (bound, step, L) of the steps of lane l's chunk from step `first` that the

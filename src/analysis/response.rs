@@ -14,9 +14,9 @@ pub const STANDARD_GRAVITY: f64 = 9.806_65;
 
 /// The interval (s) at which an RMS acceleration samples the storm's acceleration. Every step's
 /// acceleration needs every damper's force (a power each), which at 100 Hz made a metamodel's RMS
-/// eighty times as costly as its peak; sampled at 10 Hz, nine samples a period of the highest
-/// retained mode (7 rad/s), the RMS of reference storms moved by at most 1.1·10⁻⁴ (six histories,
-/// docs/method.md). Reference and metamodel sample alike, so they are compared on one definition.
+/// seventy times as costly as its peak; sampled at 10 Hz, nine samples a period of the highest
+/// retained mode (7 rad/s), the RMS of six reference histories moved by at most 1.6·10⁻⁴ every 8th
+/// step and 3.4·10⁻⁴ every 16th (docs/method.md). Reference and metamodel sample alike, so they are compared on one definition.
 pub const RMS_SAMPLING_INTERVAL_S: f64 = 0.1;
 
 /// Every how many steps of `time_step` (s) an RMS acceleration samples the storm.
