@@ -2,6 +2,7 @@
 //! structure selection, and least squares on a structure (directly or from a compressed
 //! dictionary). The refinement on the simulation error (Eq. 11) is in `refine`.
 
+use super::damper_law::DamperLaw;
 use super::lars::lars_path;
 use super::narx::{Exogenous, NarxTerm, free_run, regressors, relative_error, rest_output};
 use crate::error::{Error, Result};
@@ -22,12 +23,16 @@ pub struct Record {
     pub q_rest: f64,
     /// Every retained mode's output by mode index (the own one included); empty without coupling.
     pub outputs: Vec<Arc<[f64]>>,
+    /// The mode the record is of.
+    pub mode: usize,
+    /// The law of velocity terms, where the dampers have one.
+    pub law: Option<Arc<DamperLaw>>,
 }
 
 impl Record {
     /// A record of a mode on its own.
     pub fn single(y: Vec<f64>, q: Vec<f64>, q_rest: f64) -> Record {
-        Record { y: y.into(), q: q.into(), q_rest, outputs: Vec::new() }
+        Record { y: y.into(), q: q.into(), q_rest, outputs: Vec::new(), mode: 0, law: None }
     }
 
     /// The measured rests of the other modes: the reference starts at rest.
@@ -42,7 +47,16 @@ impl Record {
 
 /// Borrows a record's series as the exogenous part of a model.
 macro_rules! exogenous {
-    ($record:expr, $slices:ident, $rests:ident) => {{ Exogenous { q: &$record.q, q_rest: $record.q_rest, outputs: &$slices, output_rests: &$rests } }};
+    ($record:expr, $slices:ident, $rests:ident) => {{
+        Exogenous {
+            q: &$record.q,
+            q_rest: $record.q_rest,
+            outputs: &$slices,
+            output_rests: &$rests,
+            law: $record.law.as_deref(),
+            mode: $record.mode,
+        }
+    }};
 }
 
 /// Gram matrix and correlations of the one-step-ahead regression y(t) ~ g(z(t)) over t ≥ 1 for the
@@ -188,7 +202,10 @@ const PARSIMONY_FACTOR: f64 = 1.1;
 /// a path of growing active sets; every prefix (with the constant) is a candidate; each candidate is
 /// fitted by one-step least squares on the `evaluation` records and scored by its mean free-run
 /// error; a candidate that diverges on any of them is rejected. The smallest candidate within
-/// [`PARSIMONY_FACTOR`] of the best is then pruned by backward elimination.
+/// [`PARSIMONY_FACTOR`] of the best is then pruned by backward elimination. The dictionary's damper
+/// terms then enter one at a time, each the one that lowers the free-run error most, while that
+/// lowers it by more than the same factor: they do not go through LARS, whose one-step fit takes
+/// the law of the velocity for the second lag it nearly is and builds paths whose free runs diverge.
 pub fn select_structure(
     dictionary: &[NarxTerm],
     records: &[Record],
@@ -196,7 +213,8 @@ pub fn select_structure(
     max_terms: usize,
     observer: &dyn Observer,
 ) -> Result<StructureChoice> {
-    let non_constant: Vec<NarxTerm> = dictionary.iter().copied().filter(|t| !t.is_constant()).collect();
+    let non_constant: Vec<NarxTerm> =
+        dictionary.iter().copied().filter(|t| !t.is_constant() && t.damper.is_none()).collect();
     let has_constant = dictionary.iter().any(NarxTerm::is_constant);
     let paths: Vec<Vec<Vec<NarxTerm>>> = records
         .par_iter()
@@ -263,8 +281,30 @@ pub fn select_structure(
             _ => break,
         }
     }
+    let mut candidates = candidates.len();
+    let mut damper_terms: Vec<NarxTerm> = dictionary.iter().copied().filter(|t| t.damper.is_some()).collect();
+    while !damper_terms.is_empty() {
+        let addition = damper_terms
+            .par_iter()
+            .map(|term| {
+                let mut more = terms.clone();
+                more.push(*term);
+                more.sort();
+                (mean_error(&more), *term, more)
+            })
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        candidates += damper_terms.len();
+        match addition {
+            Some((e, term, more)) if e * PARSIMONY_FACTOR < error => {
+                error = e;
+                terms = more;
+                damper_terms.retain(|t| *t != term);
+            }
+            _ => break,
+        }
+    }
     check(observer)?;
-    Ok(StructureChoice { terms, error, candidates: candidates.len() })
+    Ok(StructureChoice { terms, error, candidates })
 }
 
 #[cfg(test)]
@@ -302,7 +342,7 @@ pub(super) mod tests {
         let (terms, theta) = arx();
         let records: Vec<Record> = (1..=3).map(|seed| record(&theta, &terms, seed)).collect();
         let choice =
-            select_structure(&NarxOptions::default().dictionary(0, 1), &records, &records, 8, &Silent).unwrap();
+            select_structure(&NarxOptions::default().dictionary(0, 1, false), &records, &records, 8, &Silent).unwrap();
         let mut truth = terms.clone();
         truth.sort();
         assert_eq!(choice.terms, truth);
@@ -321,7 +361,7 @@ pub(super) mod tests {
     fn compressed_least_squares_equal_the_direct_fit() {
         let (terms, theta) = arx();
         let data = record(&theta, &terms, 3);
-        let dictionary = NarxOptions::default().dictionary(0, 1);
+        let dictionary = NarxOptions::default().dictionary(0, 1, false);
         let compressed = CompressedRegression::new(&dictionary, &data).unwrap();
         for subset in [&dictionary[..], &dictionary[..4], &dictionary[3..], &[dictionary[5], dictionary[1]]] {
             let direct = least_squares(subset, &data).unwrap();

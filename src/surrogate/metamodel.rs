@@ -2,6 +2,7 @@
 //! versioned.
 
 use super::Parametrization;
+use super::damper_law::DamperLaw;
 use super::narx::NarxTerm;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
@@ -153,6 +154,9 @@ pub struct Metamodel {
     pub study: StudySpec,
     pub modes: ModalBasis,
     pub models: Vec<ModeModel>,
+    /// The law of the models' velocity terms; absent where they have none.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub damper_law: Option<DamperLaw>,
     pub calibration: CalibrationSummary,
     /// Where the wind speed's expansions are continued below the design, found once (see
     /// [`Metamodel::germ`]); `None` where the study has no random wind speed.

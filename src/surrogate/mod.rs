@@ -4,6 +4,7 @@
 pub mod batch;
 mod calibrate;
 mod cost;
+mod damper_law;
 mod design;
 pub mod identify;
 pub mod lars;
@@ -19,10 +20,11 @@ mod refine;
 pub use batch::{BatchInput, BatchWorkspace, ModalScales, MotionSink, Reduction};
 pub use calibrate::calibrate;
 pub use cost::{CalibrationCost, MAX_PCE_BASIS};
+pub use damper_law::{DamperLaw, KNEE_FRACTION};
 pub use design::{Design, design};
 pub use metamodel::{
     CalibrationSummary, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds, StaticResponse,
 };
 pub use options::{CalibrationOptions, MAX_EXPERIMENTS, WindCoverage};
 pub use parametrization::Parametrization;
-pub use refine::{Refinement, RefinementOutcome, RefinementSummary};
+pub use refine::{Refinement, RefinementOutcome, RefinementSummary, refine};

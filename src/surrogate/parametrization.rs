@@ -30,9 +30,8 @@ pub enum Parametrization {
 }
 
 fn linear_outputs(terms: &[NarxTerm]) -> Vec<usize> {
-    let mut idx: Vec<usize> = (0..terms.len())
-        .filter(|&i| terms[i].reads_own_output() && terms[i].output_power == 1 && terms[i].input_power == 0)
-        .collect();
+    let mut idx: Vec<usize> =
+        (0..terms.len()).filter(|&i| terms[i].reads_own_output() && terms[i].is_linear_output()).collect();
     idx.sort_by_key(|&i| terms[i].output_lag);
     idx
 }
@@ -43,10 +42,10 @@ fn linear_outputs(terms: &[NarxTerm]) -> Vec<usize> {
 fn lag_groups(terms: &[NarxTerm]) -> Vec<Vec<usize>> {
     let mut groups: Vec<Vec<usize>> = Vec::new();
     for (i, t) in terms.iter().enumerate() {
-        if t.is_constant() || (t.reads_own_output() && t.output_power == 1 && t.input_power == 0) {
+        if t.is_constant() || (t.reads_own_output() && t.is_linear_output()) {
             continue;
         }
-        let kind = |t: &NarxTerm| (t.output_power, t.input_power, t.output_mode);
+        let kind = |t: &NarxTerm| (t.output_power, t.input_power, t.output_mode, t.damper);
         match groups.iter_mut().find(|g| kind(&terms[g[0]]) == kind(t)) {
             Some(g) => g.push(i),
             None => groups.push(vec![i]),
@@ -148,7 +147,7 @@ mod tests {
 
     #[test]
     fn gains_round_trip() {
-        let d = NarxOptions { cross_terms: true, ..Default::default() }.dictionary(1, 3);
+        let d = NarxOptions { cross_terms: true, ..Default::default() }.dictionary(1, 3, false);
         let theta: Vec<f64> =
             (0..d.len()).map(|i| 0.01 * (i as f64 + 1.0) * if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
         for p in [Parametrization::Gains, Parametrization::StableGains, Parametrization::Direct] {

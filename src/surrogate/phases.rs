@@ -12,6 +12,7 @@
 //! 4 MB); every other experiment is reduced to its coefficients as soon as it has run.
 
 use super::Parametrization;
+use super::damper_law::{DamperLaw, KNEE_FRACTION};
 use super::design::design;
 use super::identify::{Record, StructureChoice, least_squares, select_structure, simulate};
 use super::metamodel::{
@@ -46,6 +47,9 @@ pub struct CalibrationPlan {
     pub scales: Vec<(f64, f64)>,
     /// Per mode, the chosen NARX structure.
     pub structures: Vec<StructureChoice>,
+    /// The law of velocity terms, where the dampers are nonlinear and the options ask for them.
+    #[serde(default)]
+    pub damper_law: Option<DamperLaw>,
 }
 
 impl CalibrationPlan {
@@ -103,7 +107,7 @@ impl Experiment {
     }
 
     /// Every mode's record, scaled as the plan says; with coupling each shares all modes' outputs.
-    fn records(&self, scales: &[(f64, f64)], coupled: bool) -> Vec<Record> {
+    fn records(&self, scales: &[(f64, f64)], coupled: bool, law: Option<&Arc<DamperLaw>>) -> Vec<Record> {
         let scaled = |series: &[f64], rest: f64, scale: f64| -> Arc<[f64]> {
             series.iter().map(|v| (v - rest) / scale).collect()
         };
@@ -115,6 +119,8 @@ impl Experiment {
                 q: scaled(&self.q[m], self.q_mean[m], scales[m].1),
                 q_rest: 0.0,
                 outputs: if coupled { outputs.clone() } else { Vec::new() },
+                mode: m,
+                law: law.cloned(),
             })
             .collect()
     }
@@ -135,7 +141,8 @@ impl Experiment {
             narx_errors: Vec::new(),
             refinements: Vec::new(),
         };
-        for (record, structure) in self.records(&plan.scales, coupled).iter().zip(&plan.structures) {
+        let law = plan.damper_law.clone().map(Arc::new);
+        for (record, structure) in self.records(&plan.scales, coupled, law.as_ref()).iter().zip(&plan.structures) {
             let start = least_squares(&structure.terms, record)?;
             let (theta, refinement) = refine(options.refinement, &structure.terms, start, record, observer)?;
             let error = simulate(&structure.terms, &theta, record)
@@ -203,17 +210,32 @@ pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer
         })
         .collect();
     let stage = Instant::now();
-    let records: Vec<Vec<Record>> = experiments.iter().map(|e| e.records(&scales, coupled(options, modes))).collect();
+    let nonlinear_dampers = study.damper_exponent != 1.0 && !study.structure.dampers.is_empty();
+    let damper_law = (nonlinear_dampers && options.narx.damper_terms).then(|| DamperLaw {
+        exponent: study.damper_exponent,
+        knees: (0..modes)
+            .map(|m| {
+                let differences =
+                    experiments.iter().map(|e| e.y[m].windows(2).map(|w| w[1] - w[0]).collect::<Vec<_>>());
+                let rms = pooled_rms(differences.collect::<Vec<_>>().iter().map(|d| &d[..]), |_| 0.0);
+                (KNEE_FRACTION * rms / scales[m].0).max(1e-100)
+            })
+            .collect(),
+    });
+    let law = damper_law.clone().map(Arc::new);
+    let records: Vec<Vec<Record>> =
+        experiments.iter().map(|e| e.records(&scales, coupled(options, modes), law.as_ref())).collect();
     let mut structures = Vec::new();
     for mode in 0..modes {
         check(observer)?;
         observer.progress(Progress::Structure { mode: mode + 1 });
         let chosen: Vec<Record> = records.iter().map(|r| r[mode].clone()).collect();
-        let dictionary = options.narx.dictionary(mode, modes);
+        let dictionary = options.narx.dictionary(mode, modes, damper_law.is_some());
         structures.push(select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms, observer)?);
     }
     seconds.structure = stage.elapsed().as_secs_f64();
-    Ok(Planned { plan: CalibrationPlan { design, selection, scales, structures }, selection: experiments, seconds })
+    let plan = CalibrationPlan { design, selection, scales, structures, damper_law };
+    Ok(Planned { plan, selection: experiments, seconds })
 }
 
 impl Planned {
@@ -277,8 +299,9 @@ pub fn assemble(
         return Err(Error::Numerical("the plan's design is not the options' design".into()));
     }
     let modes = plan.structures.len();
+    let law = plan.damper_law.clone().map(Arc::new);
     let selection_records: Vec<Vec<Record>> =
-        planned.selection.iter().map(|e| e.records(&plan.scales, coupled(options, modes))).collect();
+        planned.selection.iter().map(|e| e.records(&plan.scales, coupled(options, modes), law.as_ref())).collect();
     let mut models = Vec::new();
     let mut diagnostics = Vec::new();
     for mode in 0..modes {
@@ -368,6 +391,7 @@ pub fn assemble(
             shapes: (0..modes.count()).map(|m| modes.shapes.col(m).iter().copied().collect()).collect(),
         },
         models,
+        damper_law: plan.damper_law.clone(),
         calibration: CalibrationSummary {
             options: options.clone(),
             narx_mean_relative_error: diagnostics.iter().map(|d| d.narx_mean_relative_error).sum::<f64>() / count,

@@ -12,7 +12,10 @@ use crate::wind::ForceSource;
 
 impl Metamodel {
     fn programs(&self) -> Vec<ModeProgram<'_>> {
-        self.models.iter().map(|m| ModeProgram { terms: &m.terms, input_scale: m.input_scale }).collect()
+        self.models
+            .iter()
+            .map(|m| ModeProgram { terms: &m.terms, input_scale: m.input_scale, law: self.damper_law.as_ref() })
+            .collect()
     }
 
     /// Static levels and coefficients of one sample.

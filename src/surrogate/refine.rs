@@ -3,7 +3,7 @@
 //! sensitivities of the recursion or by the paper's Nelder-Mead simplex.
 
 use super::identify::{Record, simulate};
-use super::narx::{NarxTerm, diverged, rest_output};
+use super::narx::{DamperTerm, NarxTerm, diverged, rest_output};
 use crate::error::Result;
 use crate::optimise::{Minimum, NormalEquations, Stop, levenberg_marquardt, nelder_mead};
 use crate::progress::Observer;
@@ -111,13 +111,19 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
     let mut y_hat = vec![0.0; n];
     let mut s = vec![0.0; n * p];
     let rest_output_of = |term: &NarxTerm| term.output_mode.map_or(rest, |j| rests[j]);
+    // At rest every damper term is zero whatever θ, and so is its slope in the rest output.
     let slope: f64 = terms
         .iter()
         .zip(theta)
-        .filter(|(t, _)| t.reads_own_output())
+        .filter(|(t, _)| t.reads_own_output() && t.damper.is_none())
         .map(|(t, c)| c * t.output_derivative(rest, q_rest))
         .sum();
-    let rest_sensitivity: Vec<f64> = terms.iter().map(|t| t.value(rest_output_of(t), q_rest) / (1.0 - slope)).collect();
+    let rest_sensitivity: Vec<f64> = terms
+        .iter()
+        .map(|t| if t.damper.is_some() { 0.0 } else { t.value(rest_output_of(t), q_rest) / (1.0 - slope) })
+        .collect();
+    let law = record.law.as_deref();
+    let lagged = |series: &[f64], t: usize, lag: usize, rest: f64| if lag > t { rest } else { series[t - lag] };
     y_hat[0] = rest;
     s[..p].copy_from_slice(&rest_sensitivity);
     let mut jtj = vec![0.0; p * p];
@@ -140,6 +146,37 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
         let mut value = 0.0;
         row.fill(0.0);
         for (k, (term, c)) in terms.iter().zip(theta).enumerate() {
+            if let Some(kind) = term.damper {
+                let law = law?;
+                let lag = term.output_lag;
+                let difference =
+                    |series: &[f64], rest: f64| lagged(series, t, lag, rest) - lagged(series, t, lag + 1, rest);
+                // ∂Δ/∂θ_i = s_i(t−l) − s_i(t−l−1) for the own output; before t = 0 at rest.
+                let own_sensitivity = |i: usize| {
+                    let at = |step: Option<usize>| step.map_or(rest_sensitivity[i], |u| s[u * p + i]);
+                    at(t.checked_sub(lag)) - at(t.checked_sub(lag + 1))
+                };
+                // Δ·S(Δ) of the own velocity is D(Δ): a modulated term of the own mode is its law.
+                let (g, dg) = match (kind, term.output_mode) {
+                    (_, None) => {
+                        let (g, slope) = law.value_and_slope(record.mode, difference(&y_hat, rest));
+                        (g, c * slope)
+                    }
+                    (DamperTerm::Law, Some(j)) => (law.value(j, difference(slices[j], rests[j])), 0.0),
+                    (DamperTerm::Modulated, Some(j)) => {
+                        let secant = law.secant(j, difference(slices[j], rests[j]));
+                        (difference(&y_hat, rest) * secant, c * secant)
+                    }
+                };
+                value += c * g;
+                row[k] += g;
+                if dg != 0.0 {
+                    for i in 0..p {
+                        row[i] += dg * own_sensitivity(i);
+                    }
+                }
+                continue;
+            }
             let y_lag = match term.output_mode {
                 None if term.output_lag > t => rest,
                 None => y_hat[t - term.output_lag],

@@ -63,7 +63,7 @@ impl DenseLinear {
                 let target = match (t.output_power, t.input_power) {
                     (0, 0) => &mut dense.constant[m],
                     (0, 1) => &mut dense.input[t.input_lag * modes + m],
-                    (1, 0) if t.output_lag >= 1 => {
+                    (1, 0) if t.output_lag >= 1 && t.damper.is_none() => {
                         &mut dense.output[(t.output_lag * modes + m) * modes + t.output_mode.unwrap_or(m)]
                     }
                     _ => return None,

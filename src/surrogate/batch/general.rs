@@ -8,6 +8,8 @@ use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::{LANES, Lanes};
+use crate::surrogate::damper_law::secant;
+use crate::surrogate::narx::DamperTerm;
 
 /// A term with its sources resolved and its coefficient in every lane.
 #[derive(Debug, Clone, Copy)]
@@ -21,6 +23,17 @@ struct Term {
     coefficient: Lanes,
 }
 
+/// A damper term: c·D(Δ_source), or with `modulated` c·Δ_own·S(Δ_source), Δ the first difference
+/// at `lag` and the law's knee the source mode's.
+#[derive(Debug, Clone, Copy)]
+struct LawTerm {
+    source: usize,
+    modulated: bool,
+    lag: usize,
+    knee: f64,
+    coefficient: Lanes,
+}
+
 /// The batch's models as lists of terms, sorted by what they read.
 pub(super) struct TermLists {
     /// Per mode, the terms that read only the input (and the constant); they come first in a step,
@@ -30,6 +43,10 @@ pub(super) struct TermLists {
     linear: Vec<Vec<(usize, Lanes)>>,
     /// Per mode, the other terms that read an output.
     feedback: Vec<Vec<Term>>,
+    /// Per mode, the terms of the dampers' law.
+    damper: Vec<Vec<LawTerm>>,
+    /// The dampers' exponent α (unused without damper terms).
+    exponent: f64,
     /// Longest lag: the steps each block carries over from the one before.
     history: usize,
 }
@@ -42,6 +59,8 @@ impl TermLists {
             exogenous: vec![Vec::new(); modes],
             linear: vec![Vec::new(); modes],
             feedback: vec![Vec::new(); modes],
+            damper: vec![Vec::new(); modes],
+            exponent: programs.iter().find_map(|p| p.law).map_or(1.0, |law| law.exponent),
             history: longest_lag(programs),
         };
         for (m, program) in programs.iter().enumerate() {
@@ -54,6 +73,17 @@ impl TermLists {
                     input_power: t.input_power,
                     coefficient: coefficient(m, k),
                 };
+                if let Some(kind) = t.damper {
+                    let law = program.law.expect("a damper term runs with its damper law");
+                    lists.damper[m].push(LawTerm {
+                        source: term.source,
+                        modulated: kind == DamperTerm::Modulated && term.source != m,
+                        lag: t.output_lag,
+                        knee: law.knees[term.source],
+                        coefficient: term.coefficient,
+                    });
+                    continue;
+                }
                 match (t.output_power, t.input_power) {
                     (0, _) => lists.exogenous[m].push(term),
                     // Output t−lag of mode `source` sits lag·modes − source entries before this step's first.
@@ -141,6 +171,17 @@ fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: 
                 let y = &outputs[here - back];
                 for l in 0..LANES {
                     value[l] = c[l].mul_add(y[l], value[l]);
+                }
+            }
+            for term in &lists.damper[m] {
+                let (near, far) = (here - term.lag * modes, here - (term.lag + 1) * modes);
+                let (source_near, source_far) = (&outputs[near + term.source], &outputs[far + term.source]);
+                let (own_near, own_far) = (&outputs[near + m], &outputs[far + m]);
+                for l in 0..LANES {
+                    let source_difference = source_near[l] - source_far[l];
+                    let difference = if term.modulated { own_near[l] - own_far[l] } else { source_difference };
+                    let g = difference * secant(source_difference, term.knee, lists.exponent);
+                    value[l] = term.coefficient[l].mul_add(g, value[l]);
                 }
             }
             for term in &lists.feedback[m] {

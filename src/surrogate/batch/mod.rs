@@ -119,7 +119,10 @@ mod tests {
         let steps = 1300;
         let inputs = vec![(0..steps).map(|t| (t as f64 * 0.01).sin()).collect::<Vec<f64>>(), vec![1.0; steps]];
         let forces = ModalForces { mean: vec![0.0, 0.0], series: inputs.clone() };
-        let programs = [ModeProgram { terms: &a, input_scale: 1.0 }, ModeProgram { terms: &b, input_scale: 1.0 }];
+        let programs = [
+            ModeProgram { terms: &a, input_scale: 1.0, law: None },
+            ModeProgram { terms: &b, input_scale: 1.0, law: None },
+        ];
         let samples: Vec<BatchSample> = (0..3)
             .map(|k| {
                 let k = k as f64;
@@ -168,7 +171,10 @@ mod tests {
             series: vec![(0..steps).map(|t| (t as f64 * 0.013).sin()).collect(), vec![0.5; steps]],
         };
         let run_with = |a: &[NarxTerm], b: &[NarxTerm], extra: usize| -> Vec<Vec<f64>> {
-            let programs = [ModeProgram { terms: a, input_scale: 2.0 }, ModeProgram { terms: b, input_scale: 1.0 }];
+            let programs = [
+                ModeProgram { terms: a, input_scale: 2.0, law: None },
+                ModeProgram { terms: b, input_scale: 1.0, law: None },
+            ];
             let samples: Vec<BatchSample> = (0..5)
                 .map(|k| {
                     let k = k as f64;
@@ -206,7 +212,7 @@ mod tests {
     fn divergence_names_the_lane() {
         let terms = [NarxTerm::input(0, 1), NarxTerm::output(1, 1, None), NarxTerm::output(2, 1, None)];
         let forces = ModalForces { mean: vec![0.0], series: vec![vec![1.0; 5000]] };
-        let programs = [ModeProgram { terms: &terms, input_scale: 1.0 }];
+        let programs = [ModeProgram { terms: &terms, input_scale: 1.0, law: None }];
         let samples = [
             BatchSample { theta: vec![vec![0.02, 1.9, -0.95]], forces: &forces },
             BatchSample { theta: vec![vec![0.02, 2.1, -0.9]], forces: &forces },

@@ -1,6 +1,7 @@
 //! What a batch is given: each mode's model (its terms and input scale, shared by every sample)
 //! and each sample's coefficients and forces.
 
+use super::super::damper_law::DamperLaw;
 use super::super::narx::NarxTerm;
 use crate::wind::ForceSource;
 
@@ -10,6 +11,8 @@ pub struct ModeProgram<'a> {
     pub terms: &'a [NarxTerm],
     /// The NARX reads (Q − Q̄)/input_scale.
     pub input_scale: f64,
+    /// The law of velocity terms (the same for every mode); `None` where there are none.
+    pub law: Option<&'a DamperLaw>,
 }
 
 /// One sample of a batch: its coefficients and forces.
@@ -21,5 +24,5 @@ pub struct BatchSample<'a> {
 
 /// The longest lag, input or output, of any term of any mode: how far back a step reads.
 pub(super) fn longest_lag(programs: &[ModeProgram]) -> usize {
-    programs.iter().flat_map(|p| p.terms.iter()).map(|t| t.output_lag.max(t.input_lag)).max().unwrap_or(0)
+    programs.iter().flat_map(|p| p.terms.iter()).map(NarxTerm::reach).max().unwrap_or(0)
 }
