@@ -70,6 +70,21 @@ fn power(x: f64, p: f64) -> f64 {
     exp2(p * log2(x))
 }
 
+/// 1/(2k + 1) for k = 8 down to 0: the series of atanh(s)/s in s².
+const ATANH_SERIES: [f64; 9] =
+    [1.0 / 17.0, 1.0 / 15.0, 1.0 / 13.0, 1.0 / 11.0, 1.0 / 9.0, 1.0 / 7.0, 1.0 / 5.0, 1.0 / 3.0, 1.0];
+
+/// (ln 2)ⁿ/n! for n = 13 down to 0: the series of 2^r.
+const EXP2_SERIES: [f64; 14] = {
+    let mut c = [1.0; 14];
+    let mut n = 1;
+    while n < 14 {
+        c[13 - n] = c[14 - n] * std::f64::consts::LN_2 / n as f64;
+        n += 1;
+    }
+    c
+};
+
 /// log2 of a positive normal x: x = m·2^e with m in [√½, √2), ln m = 2 atanh s, s = (m − 1)/(m + 1),
 /// |s| ≤ 0.172, by its series to s¹⁷ (truncation below 2e-15).
 #[inline(always)]
@@ -83,25 +98,19 @@ fn log2(x: f64) -> f64 {
     }
     let s = (mantissa - 1.0) / (mantissa + 1.0);
     let s2 = s * s;
-    let mut series: f64 = 1.0 / 17.0;
-    for k in [15.0, 13.0, 11.0, 9.0, 7.0, 5.0, 3.0, 1.0] {
-        series = series.mul_add(s2, 1.0 / k);
-    }
+    let series = ATANH_SERIES.iter().fold(0.0f64, |sum, c| sum.mul_add(s2, *c));
     (2.0 * s * series).mul_add(std::f64::consts::LOG2_E, exponent as f64)
 }
 
-/// 2^y: y = k + r with r in [−½, ½], 2^r = e^(r ln 2) by its Taylor series to degree 13
-/// (truncation below 1e-16), times 2^k by the exponent bits. Beyond ±1000 the result saturates,
-/// which the free run's divergence bound meets long before.
+/// 2^y: y = k + r with r in [−½, ½], 2^r by its Taylor series to degree 13 (truncation below
+/// 1e-16), times 2^k by the exponent bits. Beyond ±1000 the result saturates, which the free run's
+/// divergence bound meets long before.
 #[inline(always)]
 fn exp2(y: f64) -> f64 {
     let y = y.clamp(-1000.0, 1000.0);
     let k = y.round();
-    let z = (y - k) * std::f64::consts::LN_2;
-    let mut series: f64 = 1.0;
-    for n in (1..=13).rev() {
-        series = series.mul_add(z / n as f64, 1.0);
-    }
+    let r = y - k;
+    let series = EXP2_SERIES.iter().fold(0.0f64, |sum, c| sum.mul_add(r, *c));
     series * f64::from_bits(((k as i64 + 1023) as u64) << 52)
 }
 

@@ -27,12 +27,30 @@ pub struct Record {
     pub mode: usize,
     /// The law of velocity terms, where the dampers have one.
     pub law: Option<Arc<DamperLaw>>,
+    /// With a law and coupling: per mode, the law's secant at the first difference of its output
+    /// ending at each step ([`Record::secants_of`]); otherwise empty.
+    pub secants: Vec<Arc<[f64]>>,
 }
 
 impl Record {
     /// A record of a mode on its own.
     pub fn single(y: Vec<f64>, q: Vec<f64>, q_rest: f64) -> Record {
-        Record { y: y.into(), q: q.into(), q_rest, outputs: Vec::new(), mode: 0, law: None }
+        Record { y: y.into(), q: q.into(), q_rest, outputs: Vec::new(), mode: 0, law: None, secants: Vec::new() }
+    }
+
+    /// Per mode, S at the first difference of `outputs[j]` ending at each step (at rest at step 0).
+    pub fn secants_of(outputs: &[Arc<[f64]>], law: &DamperLaw) -> Vec<Arc<[f64]>> {
+        outputs
+            .iter()
+            .enumerate()
+            .map(|(j, y)| {
+                std::iter::once(law.secant(j, 0.0)).chain(y.windows(2).map(|w| law.secant(j, w[1] - w[0]))).collect()
+            })
+            .collect()
+    }
+
+    pub(super) fn secant_slices(&self) -> Vec<&[f64]> {
+        self.secants.iter().map(|o| &o[..]).collect()
     }
 
     /// The measured rests of the other modes: the reference starts at rest.
@@ -47,13 +65,14 @@ impl Record {
 
 /// Borrows a record's series as the exogenous part of a model.
 macro_rules! exogenous {
-    ($record:expr, $slices:ident, $rests:ident) => {{
+    ($record:expr, $slices:ident, $rests:ident, $secants:ident) => {{
         Exogenous {
             q: &$record.q,
             q_rest: $record.q_rest,
             outputs: &$slices,
             output_rests: &$rests,
             law: $record.law.as_deref(),
+            secants: &$secants,
             mode: $record.mode,
         }
     }};
@@ -65,7 +84,8 @@ pub fn one_step_gram(terms: &[NarxTerm], record: &Record) -> (Vec<f64>, Vec<f64>
     let p = terms.len();
     let n = record.y.len();
     let (slices, rests) = (record.output_slices(), record.output_rests());
-    let ex = exogenous!(record, slices, rests);
+    let secants = record.secant_slices();
+    let ex = exogenous!(record, slices, rests, secants);
     let mut row = vec![0.0; p];
     let (mut sum, mut cross, mut sum_y, mut xy, mut count) = (vec![0.0; p], vec![0.0; p * p], 0.0, vec![0.0; p], 0.0);
     for t in 1..n {
@@ -105,7 +125,8 @@ fn design_with_target(terms: &[NarxTerm], record: &Record) -> Result<Mat<f64>> {
         return Err(Error::invalid("duration_s", "the storm is too short for the NARX model"));
     }
     let (slices, rests) = (record.output_slices(), record.output_rests());
-    let ex = exogenous!(record, slices, rests);
+    let secants = record.secant_slices();
+    let ex = exogenous!(record, slices, rests, secants);
     let mut x = Mat::<f64>::zeros(n - 1, p + 1);
     let mut row = vec![0.0; p];
     for t in 1..n {
@@ -174,7 +195,8 @@ pub fn simulate(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Result<Ve
     let (slices, rests) = (record.output_slices(), record.output_rests());
     let rest = rest_output(terms, theta, record.q_rest, &rests, record.y[0])?;
     let mut out = vec![0.0; record.q.len()];
-    free_run(terms, theta, &exogenous!(record, slices, rests), rest, &mut out)?;
+    let secants = record.secant_slices();
+    free_run(terms, theta, &exogenous!(record, slices, rests, secants), rest, &mut out)?;
     Ok(out)
 }
 

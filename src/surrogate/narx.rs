@@ -293,6 +293,10 @@ pub struct Exogenous<'a> {
     pub output_rests: &'a [f64],
     /// The law of velocity terms; `None` where the models have none.
     pub law: Option<&'a DamperLaw>,
+    /// Per mode, the law's secant S at the first difference ending at each step of its output in
+    /// `outputs` (computed once per record: these do not change with the model); empty, computed
+    /// as needed.
+    pub secants: &'a [&'a [f64]],
     /// The mode the model is of (whose knee its own damper terms use).
     pub mode: usize,
 }
@@ -325,14 +329,20 @@ impl Exogenous<'_> {
         let law = self.law.expect("a damper term is evaluated with its damper law");
         let lag = term.output_lag;
         let difference = |series: &[f64], rest: f64| lagged(series, t, lag, rest) - lagged(series, t, lag + 1, rest);
-        let (source, source_difference) = match term.output_mode {
-            None => (self.mode, difference(own, own_rest)),
-            Some(j) => (j, difference(self.outputs[j], self.output_rests[j])),
+        let (source_difference, secant) = match term.output_mode {
+            None => {
+                let d = difference(own, own_rest);
+                (d, law.secant(self.mode, d))
+            }
+            Some(j) => {
+                let d = difference(self.outputs[j], self.output_rests[j]);
+                (d, self.secants.get(j).map_or_else(|| law.secant(j, d), |s| lagged(s, t, lag, s[0])))
+            }
         };
         match kind {
-            DamperTerm::Law => law.value(source, source_difference),
+            DamperTerm::Law => source_difference * secant,
             // Of the own mode, Δ·S(Δ) = D(Δ).
-            DamperTerm::Modulated => difference(own, own_rest) * law.secant(source, source_difference),
+            DamperTerm::Modulated => difference(own, own_rest) * secant,
         }
     }
 }
@@ -451,14 +461,14 @@ mod tests {
         let rest = rest_output(&terms, &theta, 2.0, &[], 0.0).unwrap();
         assert!((rest - (0.01 + 0.04) / (1.0 - 1.9 + 0.95)).abs() < 1e-12);
         let q = vec![2.0; 50];
-        let ex = Exogenous { q: &q, q_rest: 2.0, outputs: &[], output_rests: &[], law: None, mode: 0 };
+        let ex = Exogenous { q: &q, q_rest: 2.0, outputs: &[], output_rests: &[], law: None, secants: &[], mode: 0 };
         let mut out = vec![0.0; 50];
         free_run(&terms, &theta, &ex, rest, &mut out).unwrap();
         assert!(out.iter().all(|v| (v - rest).abs() < 1e-12));
         // An unstable model is reported, not returned.
         let unstable = [0.0, 0.02, 2.1, -0.9];
         let q = vec![1.0; 5000];
-        let ex = Exogenous { q: &q, q_rest: 1.0, outputs: &[], output_rests: &[], law: None, mode: 0 };
+        let ex = Exogenous { q: &q, q_rest: 1.0, outputs: &[], output_rests: &[], law: None, secants: &[], mode: 0 };
         let mut out = vec![0.0; 5000];
         assert!(free_run(&terms, &unstable, &ex, 0.0, &mut out).is_err());
     }

@@ -113,6 +113,10 @@ impl Experiment {
         };
         let outputs: Vec<Arc<[f64]>> =
             self.y.iter().zip(scales).map(|(y, &(scale, _))| scaled(y, y[0], scale)).collect();
+        let secants = match law {
+            Some(law) if coupled => Record::secants_of(&outputs, law),
+            _ => Vec::new(),
+        };
         (0..self.y.len())
             .map(|m| Record {
                 y: outputs[m].clone(),
@@ -121,6 +125,7 @@ impl Experiment {
                 outputs: if coupled { outputs.clone() } else { Vec::new() },
                 mode: m,
                 law: law.cloned(),
+                secants: secants.clone(),
             })
             .collect()
     }

@@ -7,6 +7,7 @@ use super::narx::{DamperTerm, NarxTerm, diverged, rest_output};
 use crate::error::Result;
 use crate::optimise::{Minimum, NormalEquations, Stop, levenberg_marquardt, nelder_mead};
 use crate::progress::Observer;
+use faer::{ColRef, MatRef};
 use serde::{Deserialize, Serialize};
 
 /// How the coefficients are refined on the simulation error.
@@ -126,21 +127,6 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
     let lagged = |series: &[f64], t: usize, lag: usize, rest: f64| if lag > t { rest } else { series[t - lag] };
     y_hat[0] = rest;
     s[..p].copy_from_slice(&rest_sensitivity);
-    let mut jtj = vec![0.0; p * p];
-    let mut jtr = vec![0.0; p];
-    let mut sse = 0.0;
-    let accumulate = |t: usize, s: &[f64], y_hat: &[f64], jtj: &mut [f64], jtr: &mut [f64], sse: &mut f64| {
-        let r = record.y[t] - y_hat[t];
-        *sse += r * r;
-        let row = &s[t * p..(t + 1) * p];
-        for i in 0..p {
-            jtr[i] += row[i] * r;
-            for j in 0..=i {
-                jtj[i * p + j] += row[i] * row[j];
-            }
-        }
-    };
-    accumulate(0, &s, &y_hat, &mut jtj, &mut jtr, &mut sse);
     let mut row = vec![0.0; p];
     for t in 1..n {
         let mut value = 0.0;
@@ -162,10 +148,13 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
                         let (g, slope) = law.value_and_slope(record.mode, difference(&y_hat, rest));
                         (g, c * slope)
                     }
-                    (DamperTerm::Law, Some(j)) => (law.value(j, difference(slices[j], rests[j])), 0.0),
-                    (DamperTerm::Modulated, Some(j)) => {
-                        let secant = law.secant(j, difference(slices[j], rests[j]));
-                        (difference(&y_hat, rest) * secant, c * secant)
+                    (kind, Some(j)) => {
+                        let d = difference(slices[j], rests[j]);
+                        let secant = record.secants.get(j).map_or_else(|| law.secant(j, d), |s| lagged(s, t, lag, s[0]));
+                        match kind {
+                            DamperTerm::Law => (d * secant, 0.0),
+                            DamperTerm::Modulated => (difference(&y_hat, rest) * secant, c * secant),
+                        }
                     }
                 };
                 value += c * g;
@@ -200,14 +189,17 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
         }
         y_hat[t] = value;
         s[t * p..(t + 1) * p].copy_from_slice(&row);
-        accumulate(t, &s, &y_hat, &mut jtj, &mut jtr, &mut sse);
     }
-    for i in 0..p {
-        for j in 0..i {
-            jtj[j * p + i] = jtj[i * p + j];
-        }
-    }
-    Some(NormalEquations { jtj, jtr, sum_of_squares: sse })
+    // JᵀJ and Jᵀr as matrix products over the stored sensitivities (the recursion above is
+    // sequential; these vectorise).
+    let residuals: Vec<f64> = record.y.iter().zip(&y_hat).map(|(y, f)| y - f).collect();
+    let jacobian = MatRef::from_row_major_slice(&s, n, p);
+    let jtj_matrix = jacobian.transpose() * jacobian;
+    let jtr_matrix = jacobian.transpose() * ColRef::from_slice(&residuals);
+    let jtj = (0..p * p).map(|k| jtj_matrix[(k / p, k % p)]).collect();
+    let jtr = (0..p).map(|i| jtr_matrix[i]).collect();
+    let sum_of_squares = residuals.iter().map(|r| r * r).sum();
+    Some(NormalEquations { jtj, jtr, sum_of_squares })
 }
 
 #[cfg(test)]
