@@ -378,6 +378,31 @@ pub(super) mod tests {
         assert!(simulation_error(&choice.terms, &fitted, &records[0]) < 1e-15);
     }
 
+    /// A damper's law in the data is found: it enters after the polynomial structure, on the
+    /// free-run error, and the fit on the chosen terms reproduces the data.
+    #[test]
+    fn identification_finds_the_law_of_the_velocity() {
+        use crate::surrogate::DamperLaw;
+        use crate::surrogate::narx::DamperTerm;
+        let law = Arc::new(DamperLaw { exponent: 0.38, knees: vec![1e-3] });
+        let (mut terms, mut theta) = arx();
+        terms.push(NarxTerm::damper(DamperTerm::Law, 1, None));
+        theta.push(-0.004);
+        let records: Vec<Record> = (1..=3)
+            .map(|seed| {
+                let mut r = Record { law: Some(law.clone()), ..record(&[0.0; 4], &arx().0, seed) };
+                r.y = simulate(&terms, &theta, &r).unwrap().into();
+                r
+            })
+            .collect();
+        let dictionary = NarxOptions::default().dictionary(0, 1, true);
+        assert_eq!(dictionary.iter().filter(|t| t.damper.is_some()).count(), 1);
+        let choice = select_structure(&dictionary, &records, &records, 8, &Silent).unwrap();
+        assert!(choice.terms.contains(&NarxTerm::damper(DamperTerm::Law, 1, None)), "{:?}", choice.terms);
+        let fitted = least_squares(&choice.terms, &records[0]).unwrap();
+        assert!(simulation_error(&choice.terms, &fitted, &records[0]) < 1e-12);
+    }
+
     /// The least squares of any subset from the compressed dictionary equal those on the record.
     #[test]
     fn compressed_least_squares_equal_the_direct_fit() {

@@ -166,6 +166,26 @@ pub struct Metamodel {
 }
 
 impl Metamodel {
+    /// A file whose models read the dampers' law must carry it, with a knee for every mode.
+    fn check_damper_law(&self) -> Result<()> {
+        let modes = self.models.len();
+        let reads_law = self.models.iter().flat_map(|m| &m.terms).any(|t| t.damper.is_some());
+        match &self.damper_law {
+            None if reads_law => Err(Error::invalid("metamodel", "its models have damper terms but no damper_law")),
+            Some(law)
+                if !(law.exponent.is_finite() && law.exponent > 0.0 && law.exponent <= 2.0)
+                    || law.knees.len() != modes
+                    || !law.knees.iter().all(|k| k.is_finite() && *k > 0.0) =>
+            {
+                Err(Error::invalid(
+                    "metamodel",
+                    format!("damper_law needs an exponent in (0, 2] and {modes} finite positive knees"),
+                ))
+            }
+            _ => Ok(()),
+        }
+    }
+
     /// Reads a metamodel and checks that this build can use it.
     pub fn from_json(text: &str) -> Result<Metamodel> {
         let value: serde_json::Value =
@@ -186,6 +206,7 @@ impl Metamodel {
         }
         let mut metamodel: Metamodel =
             serde_json::from_value(value).map_err(|e| Error::invalid("metamodel", e.to_string()))?;
+        metamodel.check_damper_law()?;
         // Read, it is of this build's format: written again, it says so.
         metamodel.version = FORMAT_VERSION;
         Ok(metamodel)

@@ -207,6 +207,65 @@ mod tests {
         assert!(dense[0].iter().any(|v| v.abs() > 0.1));
     }
 
+    /// Damper terms (a mode's own law, another's, and the own velocity at another's secant) run
+    /// in the batch exactly as in the scalar free run the calibration fits them with.
+    #[test]
+    fn damper_terms_run_as_in_the_scalar_free_run() {
+        use crate::surrogate::DamperLaw;
+        use crate::surrogate::identify::{Record, simulate};
+        use crate::surrogate::narx::DamperTerm;
+        use std::sync::Arc;
+        let law = DamperLaw { exponent: 0.38, knees: vec![2e-3, 5e-3] };
+        let a = [
+            NarxTerm::input(0, 1),
+            NarxTerm::output(1, 1, None),
+            NarxTerm::output(2, 1, None),
+            NarxTerm::damper(DamperTerm::Law, 1, None),
+        ];
+        let b = [
+            NarxTerm::input(0, 1),
+            NarxTerm::output(1, 1, None),
+            NarxTerm::output(2, 1, None),
+            NarxTerm::damper(DamperTerm::Law, 1, Some(0)),
+            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
+        ];
+        let steps = 3000;
+        let series =
+            |f: f64| -> Vec<f64> { (0..steps).map(|t| (t as f64 * f).sin() + 0.3 * (t as f64 * 0.17).cos()).collect() };
+        let forces = ModalForces { mean: vec![0.0, 0.0], series: vec![series(0.011), series(0.029)] };
+        let programs = [
+            ModeProgram { terms: &a, input_scale: 1.0, law: Some(&law) },
+            ModeProgram { terms: &b, input_scale: 1.0, law: Some(&law) },
+        ];
+        let theta = vec![vec![0.004, 1.985, -0.9905, -0.003], vec![0.02, 1.95, -0.96, 0.002, -0.01]];
+        let samples = [BatchSample { theta: theta.clone(), forces: &forces }];
+        let mut got = vec![vec![0.0; steps]; 2];
+        let mut consume = |first: usize, outputs: &[Lanes], _: &[Lanes]| {
+            for (k, lanes) in outputs.iter().enumerate() {
+                got[k % 2][first + k / 2] = lanes[0];
+            }
+        };
+        run(&programs, &samples, steps, 0.01, &mut BatchWorkspace::default(), &mut Sink::Blocks(&mut consume)).unwrap();
+        assert!(got[0].iter().any(|v| v.abs() > 0.05) && got[1].iter().any(|v| v.abs() > 0.05));
+        let law = Arc::new(law.clone());
+        let outputs: Vec<Arc<[f64]>> = got.iter().map(|o| o[..].into()).collect();
+        for (m, terms) in [&a[..], &b[..]].into_iter().enumerate() {
+            let record = Record {
+                mode: m,
+                law: Some(law.clone()),
+                secants: Record::secants_of(&outputs, &law),
+                outputs: outputs.clone(),
+                ..Record::single(vec![0.0; steps], forces.series[m].clone(), 0.0)
+            };
+            // The two sum the terms in different orders (the batch by fused multiply-adds), and the
+            // lightly damped recursion carries the rounding on: equal to 1e-10 of the largest output.
+            let scalar = simulate(terms, &theta[m], &record).unwrap();
+            let largest = got[m].iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            let worst = scalar.iter().zip(&got[m]).fold(0.0f64, |a, (s, b)| a.max((s - b).abs()));
+            assert!(worst <= 1e-10 * largest, "mode {m}: {worst:e} of {largest}");
+        }
+    }
+
     /// A lane whose model is unstable is reported with its mode and step; the others do not matter.
     #[test]
     fn divergence_names_the_lane() {
