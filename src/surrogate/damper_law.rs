@@ -8,9 +8,7 @@
 //! 1.000 with α = 1). The velocity term D(Δ) = Δ·(Δ² + κ²)^((α−1)/2) of the first difference
 //! Δ = y(t − l) − y(t − l − 1) is that law. The knee κ smooths it near Δ = 0, where a damper's
 //! velocity is not one mode's (the other modes' velocities cross zero elsewhere) and where the
-//! pure law's slope is infinite (which the refinement's sensitivities could not follow). The
-//! secant S(Δ) = D(Δ)/Δ carries the law to a mode whose dampers' velocities another mode makes
-//! ([`super::narx::DamperTerm::Modulated`]).
+//! pure law's slope is infinite (which the refinement's sensitivities could not follow).
 //!
 //! The power is formed by [`log2`] and [`exp2`] from fused multiply-adds and divisions only, so that
 //! the calibration's scalar recursions and the batched free run compute the same value on every

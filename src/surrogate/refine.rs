@@ -3,7 +3,7 @@
 //! sensitivities of the recursion or by the paper's Nelder-Mead simplex.
 
 use super::identify::{Record, simulate};
-use super::narx::{DamperTerm, NarxTerm, diverged, rest_output};
+use super::narx::{NarxTerm, diverged, rest_output};
 use crate::error::Result;
 use crate::optimise::{Minimum, NormalEquations, Stop, levenberg_marquardt, nelder_mead};
 use crate::progress::Observer;
@@ -132,39 +132,29 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
         let mut value = 0.0;
         row.fill(0.0);
         for (k, (term, c)) in terms.iter().zip(theta).enumerate() {
-            if let Some(kind) = term.damper {
+            if term.damper.is_some() {
                 let law = law?;
                 let lag = term.output_lag;
                 let difference =
                     |series: &[f64], rest: f64| lagged(series, t, lag, rest) - lagged(series, t, lag + 1, rest);
-                // ∂Δ/∂θ_i = s_i(t−l) − s_i(t−l−1) for the own output; before t = 0 at rest.
-                let own_sensitivity = |i: usize| {
-                    let at = |step: Option<usize>| step.map_or(rest_sensitivity[i], |u| s[u * p + i]);
-                    at(t.checked_sub(lag)) - at(t.checked_sub(lag + 1))
-                };
-                // Δ·S(Δ) of the own velocity is D(Δ): a modulated term of the own mode is its law.
-                let (g, dg) = match (kind, term.output_mode) {
-                    (_, None) => {
+                let g = match term.output_mode {
+                    None => {
+                        // ∂D(ŷ(t−l) − ŷ(t−l−1))/∂θ_i = D′·(s_i(t−l) − s_i(t−l−1)); before t = 0 at rest.
                         let (g, slope) = law.value_and_slope(record.mode, difference(&y_hat, rest));
-                        (g, c * slope)
-                    }
-                    (kind, Some(j)) => {
-                        let d = difference(slices[j], rests[j]);
-                        let secant =
-                            record.secants.get(j).map_or_else(|| law.secant(j, d), |s| lagged(s, t, lag, s[0]));
-                        match kind {
-                            DamperTerm::Law => (d * secant, 0.0),
-                            DamperTerm::Modulated => (difference(&y_hat, rest) * secant, c * secant),
+                        let at = |step: Option<usize>, i: usize| step.map_or(rest_sensitivity[i], |u| s[u * p + i]);
+                        let (near, far) = (t.checked_sub(lag), t.checked_sub(lag + 1));
+                        for i in 0..p {
+                            row[i] += c * slope * (at(near, i) - at(far, i));
                         }
+                        g
+                    }
+                    Some(j) => {
+                        let d = difference(slices[j], rests[j]);
+                        d * record.secants.get(j).map_or_else(|| law.secant(j, d), |s| lagged(s, t, lag, s[0]))
                     }
                 };
                 value += c * g;
                 row[k] += g;
-                if dg != 0.0 {
-                    for i in 0..p {
-                        row[i] += dg * own_sensitivity(i);
-                    }
-                }
                 continue;
             }
             let y_lag = match term.output_mode {
@@ -229,7 +219,7 @@ mod tests {
     }
 
     /// The sensitivities of damper terms are right: from perturbed coefficients Levenberg-Marquardt
-    /// returns to the truth of a model with the own velocity's law and another mode's secant.
+    /// returns to the truth of a model with the laws of its own velocity and of another mode's.
     #[test]
     fn refinement_recovers_damper_term_coefficients() {
         use crate::surrogate::DamperLaw;
@@ -241,7 +231,7 @@ mod tests {
             NarxTerm::output(1, 1, None),
             NarxTerm::output(2, 1, None),
             NarxTerm::damper(DamperTerm::Law, 1, None),
-            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
+            NarxTerm::damper(DamperTerm::Law, 1, Some(0)),
         ];
         let theta = [0.002, 1.98, -0.985, -0.004, -0.003];
         let other: Arc<[f64]> = (0..4000).map(|t| (t as f64 * 0.013).sin()).collect();

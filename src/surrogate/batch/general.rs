@@ -9,7 +9,6 @@ use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::{LANES, Lanes};
 use crate::surrogate::damper_law::secant;
-use crate::surrogate::narx::DamperTerm;
 
 /// A term with its sources resolved and its coefficient in every lane.
 #[derive(Debug, Clone, Copy)]
@@ -23,12 +22,10 @@ struct Term {
     coefficient: Lanes,
 }
 
-/// A damper term: c·D(Δ_source), or with `modulated` c·Δ_own·S(Δ_source), Δ the first difference
-/// at `lag` and the law's knee the source mode's.
+/// A damper term c·D(Δ_source), Δ the first difference at `lag`, with the source mode's knee.
 #[derive(Debug, Clone, Copy)]
 struct LawTerm {
     source: usize,
-    modulated: bool,
     lag: usize,
     knee: f64,
     coefficient: Lanes,
@@ -73,11 +70,10 @@ impl TermLists {
                     input_power: t.input_power,
                     coefficient: coefficient(m, k),
                 };
-                if let Some(kind) = t.damper {
+                if t.damper.is_some() {
                     let law = program.law.expect("a damper term runs with its damper law");
                     lists.damper[m].push(LawTerm {
                         source: term.source,
-                        modulated: kind == DamperTerm::Modulated && term.source != m,
                         lag: t.output_lag,
                         knee: law.knees[term.source],
                         coefficient: term.coefficient,
@@ -174,13 +170,11 @@ fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: 
                 }
             }
             for term in &lists.damper[m] {
-                let (near, far) = (here - term.lag * modes, here - (term.lag + 1) * modes);
-                let (source_near, source_far) = (&outputs[near + term.source], &outputs[far + term.source]);
-                let (own_near, own_far) = (&outputs[near + m], &outputs[far + m]);
+                let near = &outputs[here - term.lag * modes + term.source];
+                let far = &outputs[here - (term.lag + 1) * modes + term.source];
                 for l in 0..LANES {
-                    let source_difference = source_near[l] - source_far[l];
-                    let difference = if term.modulated { own_near[l] - own_far[l] } else { source_difference };
-                    let g = difference * secant(source_difference, term.knee, lists.exponent);
+                    let difference = near[l] - far[l];
+                    let g = difference * secant(difference, term.knee, lists.exponent);
                     value[l] = term.coefficient[l].mul_add(g, value[l]);
                 }
             }
