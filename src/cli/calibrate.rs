@@ -35,6 +35,11 @@ pub struct CalibrateArgs {
     /// Allow products of output and input powers in the NARX dictionary (22 candidates).
     #[arg(long)]
     pub cross_terms: bool,
+    /// The dampers' law of the modal velocities as candidate terms besides the paper's
+    /// polynomial dictionary: more accurate accelerations and damper forces within the design's
+    /// wind speeds, far less accurate beyond them (docs/method.md)
+    #[arg(long)]
+    pub damper_terms: bool,
     /// Cover these wind speeds (m/s) beyond the input model's spread, as LOWER:UPPER; the fits
     /// are weighted so the expansions stay the input model's.
     #[arg(long, value_name = "LOWER:UPPER", conflicts_with = "cover_climate")]
@@ -101,6 +106,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
         RefinementChoice::None => Refinement::None,
     };
     options.narx.cross_terms = args.cross_terms;
+    options.narx.damper_terms = args.damper_terms;
     options.cover_wind_speeds = coverage(args)?;
     let observer = Terminal { started: Instant::now(), last: Mutex::new(String::new()) };
     let metamodel = run_calibration(&study, &options, &observer)?;

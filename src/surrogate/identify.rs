@@ -395,7 +395,7 @@ pub(super) mod tests {
                 r
             })
             .collect();
-        let dictionary = NarxOptions::default().dictionary(0, 1, true);
+        let dictionary = NarxOptions { damper_terms: true, ..Default::default() }.dictionary(0, 1, true);
         assert_eq!(dictionary.iter().filter(|t| t.damper.is_some()).count(), 1);
         let choice = select_structure(&dictionary, &records, &records, 8, &Silent).unwrap();
         assert!(choice.terms.contains(&NarxTerm::damper(DamperTerm::Law, 1, None)), "{:?}", choice.terms);

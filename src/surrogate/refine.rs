@@ -143,8 +143,8 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
                         let (g, slope) = law.value_and_slope(record.mode, difference(&y_hat, rest));
                         let at = |step: Option<usize>, i: usize| step.map_or(rest_sensitivity[i], |u| s[u * p + i]);
                         let (near, far) = (t.checked_sub(lag), t.checked_sub(lag + 1));
-                        for i in 0..p {
-                            row[i] += c * slope * (at(near, i) - at(far, i));
+                        for (i, r) in row.iter_mut().enumerate() {
+                            *r += c * slope * (at(near, i) - at(far, i));
                         }
                         g
                     }
