@@ -1,7 +1,7 @@
 //! `windmeta bench`: the method's costs side by side, measured in one run so that their ratios are
 //! honest: a full calibration and its stages, the per-sample stages of one full-size storm (wind by
 //! both paths, both reference integrators, the metamodel's free run on the same storm), and an
-//! exceedance curve, a roof-acceleration curve, drift and acceleration profiles of every floor, an
+//! exceedance curve, roof-acceleration and RMS-acceleration curves, drift and acceleration profiles of every floor, an
 //! annual curve with ten return levels and Sobol indices end to end. Speed is measured here and in
 //! `benches/`, never asserted in a test.
 
@@ -125,15 +125,20 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         exceedance,
         repetitions.min(3),
     ));
-    let roof_acceleration = Response::Acceleration { floor: study.structure.floors() };
-    let acceleration = time(repetitions.min(3), |r| {
-        metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, roof_acceleration, &Silent)
-    })?;
-    rows.push(row(
-        format!("roof acceleration exceedance peaks, {} samples (all threads)", args.samples),
-        acceleration,
-        repetitions.min(3),
-    ));
+    let floor = study.structure.floors();
+    for (name, response) in [
+        ("roof acceleration", Response::Acceleration { floor }),
+        ("roof RMS acceleration", Response::RmsAcceleration { floor }),
+    ] {
+        let seconds = time(repetitions.min(3), |r| {
+            metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, response, &Silent)
+        })?;
+        rows.push(row(
+            format!("{name} exceedance peaks, {} samples (all threads)", args.samples),
+            seconds,
+            repetitions.min(3),
+        ));
+    }
     for kind in [ResponseKind::Drift, ResponseKind::Acceleration] {
         let profile = time(repetitions.min(3), |r| {
             let inputs = &study.inputs;

@@ -166,9 +166,15 @@ pub struct Metamodel {
 }
 
 impl Metamodel {
-    /// A file whose models read the dampers' law must carry it, with a knee for every mode.
-    fn check_damper_law(&self) -> Result<()> {
+    /// Every term reads a mode the file has, and a file whose models read the dampers' law carries
+    /// it, with a knee for every mode: what the free run indexes by.
+    fn check_terms(&self) -> Result<()> {
         let modes = self.models.len();
+        if let Some(term) =
+            self.models.iter().flat_map(|m| &m.terms).find(|t| t.output_mode.is_some_and(|j| j >= modes))
+        {
+            return Err(Error::invalid("metamodel", format!("the term {term} reads a mode the file does not have")));
+        }
         let reads_law = self.models.iter().flat_map(|m| &m.terms).any(|t| t.damper.is_some());
         match &self.damper_law {
             None if reads_law => Err(Error::invalid("metamodel", "its models have damper terms but no damper_law")),
@@ -206,7 +212,7 @@ impl Metamodel {
         }
         let mut metamodel: Metamodel =
             serde_json::from_value(value).map_err(|e| Error::invalid("metamodel", e.to_string()))?;
-        metamodel.check_damper_law()?;
+        metamodel.check_terms()?;
         // Read, it is of this build's format: written again, it says so.
         metamodel.version = FORMAT_VERSION;
         Ok(metamodel)

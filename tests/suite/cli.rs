@@ -227,6 +227,7 @@ fn bench_reports_rows_and_headline_figures() {
     assert_eq!(report["calibration_seconds"].as_f64().unwrap(), stage("calibration, K = 24"));
     assert_eq!(report["exceedance_10k_seconds"].as_f64().unwrap(), stage("exceedance curve, 16 samples"));
     assert!(stage("roof acceleration exceedance peaks, 16 samples") > 0.0);
+    assert!(stage("roof RMS acceleration exceedance peaks, 16 samples") > 0.0);
     assert!(stage("drift profile, every floor") > 0.0 && stage("acceleration profile, every floor") > 0.0);
     assert!(stage("hazard curve, 400 storms, 10 return periods") > 0.0);
     assert!(stage("Sobol indices, N = 16") > 0.0);

@@ -389,3 +389,41 @@ fn winds_below_the_design_continue_the_expansions_linearly_in_ln_v() {
     assert!(report.peak_correlation > 0.993, "peak correlation {}", report.peak_correlation);
     assert!(report.median_peak_relative_error < 0.0125, "median peak error {}", report.median_peak_relative_error);
 }
+
+/// A metamodel file whose terms read a mode it does not have, or the dampers' law it does not
+/// carry, is refused by name when read, not found out by a panic in the free run.
+#[test]
+fn files_whose_terms_cannot_run_are_refused() {
+    let (metamodel, _) = fixture::metamodel();
+    let text = serde_json::to_string(metamodel).unwrap();
+    assert!(Metamodel::from_json(&text).is_ok());
+    let refused = |edit: &dyn Fn(&mut Value), expected: &str| {
+        let mut value: Value = serde_json::from_str(&text).unwrap();
+        edit(&mut value);
+        let error = Metamodel::from_json(&value.to_string()).unwrap_err().to_string();
+        assert!(error.contains(expected), "expected `{expected}` in: {error}");
+    };
+    let push_term = |value: &mut Value, term: Value| {
+        value["models"][0]["terms"].as_array_mut().unwrap().push(term);
+    };
+    refused(
+        &|v| {
+            push_term(
+                v,
+                serde_json::json!({"output_lag": 1, "output_power": 1, "input_lag": 0, "input_power": 0, "output_mode": 7}),
+            )
+        },
+        "reads a mode the file does not have",
+    );
+    let law_term =
+        serde_json::json!({"output_lag": 1, "output_power": 1, "input_lag": 0, "input_power": 0, "damper": "law"});
+    refused(&|v| push_term(v, law_term.clone()), "no damper_law");
+    let modes = metamodel.models.len();
+    refused(
+        &|v| {
+            push_term(v, law_term.clone());
+            v["damper_law"] = serde_json::json!({"exponent": 0.38, "knees": vec![-1.0; modes]});
+        },
+        "finite positive knees",
+    );
+}
