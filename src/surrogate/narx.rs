@@ -320,11 +320,26 @@ impl Exogenous<'_> {
         match term.output_mode {
             None => law.value(self.mode, difference(own, own_rest)),
             Some(j) => {
-                let d = difference(self.outputs[j], self.output_rests[j]);
-                d * self.secants.get(j).map_or_else(|| law.secant(j, d), |s| lagged(s, t, lag, s[0]))
+                other_mode_law(law, j, self.outputs[j], self.output_rests[j], self.secants.get(j).copied(), t, lag)
             }
         }
     }
+}
+
+/// D(Δ_j) of another mode j's given output `series` at lag `lag` of step t, with the secants of
+/// that series where they were computed once ([`Exogenous::secants`]).
+#[inline]
+pub(super) fn other_mode_law(
+    law: &DamperLaw,
+    j: usize,
+    series: &[f64],
+    rest: f64,
+    secants: Option<&[f64]>,
+    t: usize,
+    lag: usize,
+) -> f64 {
+    let difference = lagged(series, t, lag, rest) - lagged(series, t, lag + 1, rest);
+    difference * secants.map_or_else(|| law.secant(j, difference), |s| lagged(s, t, lag, s[0]))
 }
 
 /// Value of every term at step t given the own output series (measured or simulated) and the rest.

@@ -220,10 +220,11 @@ pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer
         exponent: study.damper_exponent,
         knees: (0..modes)
             .map(|m| {
-                let differences =
-                    experiments.iter().map(|e| e.y[m].windows(2).map(|w| w[1] - w[0]).collect::<Vec<_>>());
-                let rms = pooled_rms(differences.collect::<Vec<_>>().iter().map(|d| &d[..]), |_| 0.0);
-                (KNEE_FRACTION * rms / scales[m].0).max(1e-100)
+                let (sum, count) = experiments.iter().fold((0.0, 0usize), |(sum, count), e| {
+                    let squares: f64 = e.y[m].windows(2).map(|w| (w[1] - w[0]).powi(2)).sum();
+                    (sum + squares, count + e.y[m].len() - 1)
+                });
+                (KNEE_FRACTION * (sum / count as f64).sqrt() / scales[m].0).max(1e-100)
             })
             .collect(),
     });

@@ -3,7 +3,7 @@
 //! sensitivities of the recursion or by the paper's Nelder-Mead simplex.
 
 use super::identify::{Record, simulate};
-use super::narx::{NarxTerm, diverged, rest_output};
+use super::narx::{NarxTerm, diverged, other_mode_law, rest_output};
 use crate::error::Result;
 use crate::optimise::{Minimum, NormalEquations, Stop, levenberg_marquardt, nelder_mead};
 use crate::progress::Observer;
@@ -149,8 +149,7 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
                         g
                     }
                     Some(j) => {
-                        let d = difference(slices[j], rests[j]);
-                        d * record.secants.get(j).map_or_else(|| law.secant(j, d), |s| lagged(s, t, lag, s[0]))
+                        other_mode_law(law, j, slices[j], rests[j], record.secants.get(j).map(|s| &s[..]), t, lag)
                     }
                 };
                 value += c * g;
