@@ -12,4 +12,4 @@ pub use damper::{Dampers, ImplicitDamperSolve};
 pub use full::{FloorResponse, FullSystem, integrate_full};
 pub use modal::{ModalResponse, integrate_reduced};
 pub use motion::{ModalMotion, SampleModel};
-pub use power::{power, sign_power};
+pub use power::{power, power_lanes, sign_power};

@@ -29,33 +29,44 @@ const INVERSE_FACTORIALS: [f64; 14] = {
 /// dampers is vectorized (the compiler left it a call in the acceleration sink).
 #[inline(always)]
 pub fn power(x: f64, alpha: f64) -> f64 {
-    let bits = x.to_bits();
+    power_lanes([x], alpha)[0]
+}
+
+/// [`power`] of every lane, each operation a pass over the lanes, so that the lanes vectorise where
+/// one loop over [`power`] of each stays scalar (a recursion that needs a power per step and lane,
+/// [`crate::surrogate::DamperLaw`]'s, ran scalar that way). Lane by lane the same operations as
+/// [`power`], which is its one-lane case: the same values to the bit.
+#[inline(always)]
+pub fn power_lanes<const N: usize>(x: [f64; N], alpha: f64) -> [f64; N] {
+    use std::array::from_fn;
+    let bits: [u64; N] = from_fn(|l| x[l].to_bits());
     // x = m·2^e with m in [1, 2), then m in [√½, √2) so that |s| below is at most 0.172.
-    let biased_exponent = f64::from_bits((bits >> 52) | TWO_52.to_bits()) - TWO_52;
-    let mantissa = f64::from_bits((bits & 0x000f_ffff_ffff_ffff) | 1f64.to_bits());
-    let high = mantissa > std::f64::consts::SQRT_2;
-    let m = if high { 0.5 * mantissa } else { mantissa };
-    let e = biased_exponent - 1023.0 + if high { 1.0 } else { 0.0 };
+    let biased_exponent: [f64; N] = from_fn(|l| f64::from_bits((bits[l] >> 52) | TWO_52.to_bits()) - TWO_52);
+    let mantissa: [f64; N] = from_fn(|l| f64::from_bits((bits[l] & 0x000f_ffff_ffff_ffff) | 1f64.to_bits()));
+    let high: [bool; N] = from_fn(|l| mantissa[l] > std::f64::consts::SQRT_2);
+    let m: [f64; N] = from_fn(|l| if high[l] { 0.5 * mantissa[l] } else { mantissa[l] });
+    let e: [f64; N] = from_fn(|l| biased_exponent[l] - 1023.0 + if high[l] { 1.0 } else { 0.0 });
     // ln m = 2·atanh(s), s = (m − 1)/(m + 1): the series to s¹⁷ leaves 2·0.172¹⁹/19 < 10⁻¹⁵.
-    let s = (m - 1.0) / (m + 1.0);
-    let s2 = s * s;
-    let series = 1.0 / 15.0 + s2 / 17.0;
-    let series = 1.0 / 13.0 + s2 * series;
-    let series = 1.0 / 11.0 + s2 * series;
-    let series = 1.0 / 9.0 + s2 * series;
-    let series = 1.0 / 7.0 + s2 * series;
-    let series = 1.0 / 5.0 + s2 * series;
-    let series = 1.0 / 3.0 + s2 * series;
-    let ln_m = 2.0 * s * (1.0 + s2 * series);
-    let y = alpha * (e * std::f64::consts::LN_2 + ln_m);
+    let s: [f64; N] = from_fn(|l| (m[l] - 1.0) / (m[l] + 1.0));
+    let s2: [f64; N] = from_fn(|l| s[l] * s[l]);
+    let mut series: [f64; N] = from_fn(|l| 1.0 / 15.0 + s2[l] / 17.0);
+    for c in [1.0 / 13.0, 1.0 / 11.0, 1.0 / 9.0, 1.0 / 7.0, 1.0 / 5.0, 1.0 / 3.0] {
+        series = from_fn(|l| c + s2[l] * series[l]);
+    }
+    let ln_m: [f64; N] = from_fn(|l| 2.0 * s[l] * (1.0 + s2[l] * series[l]));
+    let y: [f64; N] = from_fn(|l| alpha * (e[l] * std::f64::consts::LN_2 + ln_m[l]));
     // e^y = 2^k·e^r with k = round(y/ln 2), |r| ≤ ln 2 / 2; Taylor to r¹³ leaves 0.347¹⁴/14! < 10⁻¹⁶.
-    let rounded = y * std::f64::consts::LOG2_E + ROUNDER;
-    let k = rounded - ROUNDER;
-    let r = y - k * std::f64::consts::LN_2;
-    let taylor = INVERSE_FACTORIALS.iter().rev().fold(0.0, |sum, c| c + r * sum);
-    let k_bits = rounded.to_bits().wrapping_sub(ROUNDER.to_bits());
-    let scale = f64::from_bits(k_bits.wrapping_add(1023) << 52);
-    if x < f64::MIN_POSITIVE { 0.0 } else { taylor * scale }
+    let rounded: [f64; N] = from_fn(|l| y[l] * std::f64::consts::LOG2_E + ROUNDER);
+    let r: [f64; N] = from_fn(|l| y[l] - (rounded[l] - ROUNDER) * std::f64::consts::LN_2);
+    let mut taylor = [0.0; N];
+    for c in INVERSE_FACTORIALS.iter().rev() {
+        taylor = from_fn(|l| c + r[l] * taylor[l]);
+    }
+    from_fn(|l| {
+        let k_bits = rounded[l].to_bits().wrapping_sub(ROUNDER.to_bits());
+        let scale = f64::from_bits(k_bits.wrapping_add(1023) << 52);
+        if x[l] < f64::MIN_POSITIVE { 0.0 } else { taylor[l] * scale }
+    })
 }
 
 /// The damper law's shape sign(v)|v|^α, with [`power`]'s accuracy.
@@ -84,5 +95,18 @@ mod tests {
         assert_eq!(power(0.0, 0.38), 0.0);
         assert_eq!(power(1.0, 0.38), 1.0);
         assert!((power(2.0, 0.5) - std::f64::consts::SQRT_2).abs() < 1e-15);
+    }
+
+    /// Eight lanes at once give each lane's [`power`] to the bit, zeros included.
+    #[test]
+    fn lanes_agree_with_the_scalar_power() {
+        for i in 0..20_000 {
+            let x: [f64; 8] =
+                std::array::from_fn(|l| if (i + l) % 97 == 0 { 0.0 } else { 10f64.powf(-12.0 + (i * 8 + l) as f64 * 1.5e-4) });
+            let lanes = power_lanes(x, -0.31);
+            for l in 0..8 {
+                assert_eq!(lanes[l].to_bits(), power(x[l], -0.31).to_bits(), "{}", x[l]);
+            }
+        }
     }
 }

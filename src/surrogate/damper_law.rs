@@ -14,7 +14,7 @@
 //! calibration's scalar recursions and the batched free run compute the same value on every
 //! processor, and the free run's lanes vectorise.
 
-use crate::dynamics::power;
+use crate::dynamics::{power, power_lanes};
 use serde::{Deserialize, Serialize};
 
 /// The dampers' exponent and, per mode, the knee of its velocity term in that mode's scaled
@@ -59,7 +59,21 @@ impl DamperLaw {
 /// The law's secant S(Δ) = (Δ² + κ²)^((α−1)/2).
 #[inline(always)]
 pub fn secant(difference: f64, knee: f64, exponent: f64) -> f64 {
-    power(difference.mul_add(difference, knee * knee), (exponent - 1.0) / 2.0)
+    secant_lanes([difference], knee, exponent)[0]
+}
+
+/// D(Δ) = Δ·S(Δ) of every lane, vectorised (see [`power_lanes`]); lane by lane the value of
+/// `Δ * secant(Δ, κ, α)`, to the bit.
+#[inline(always)]
+pub fn law_lanes<const N: usize>(difference: [f64; N], knee: f64, exponent: f64) -> [f64; N] {
+    let secants = secant_lanes(difference, knee, exponent);
+    std::array::from_fn(|l| difference[l] * secants[l])
+}
+
+#[inline(always)]
+fn secant_lanes<const N: usize>(difference: [f64; N], knee: f64, exponent: f64) -> [f64; N] {
+    let squares = std::array::from_fn(|l| difference[l].mul_add(difference[l], knee * knee));
+    power_lanes(squares, (exponent - 1.0) / 2.0)
 }
 
 #[cfg(test)]

@@ -1,5 +1,6 @@
-//! The free run of the paper's structures: every term the constant, Q_m(t − k) or y_s(t − k)
-//! with k ≤ [`DENSE_LAGS`], on at most [`DENSE_MODES`] modes, run as dense coefficient arrays with
+//! The free run of the paper's structures: every term the constant, Q_m(t − k), y_s(t − k) with
+//! k ≤ [`DENSE_LAGS`] or the dampers' law D(Δ_s) of a mode's last first difference, on at most
+//! [`DENSE_MODES`] modes, run as dense coefficient arrays with
 //! the modes and lags fixed at compile time, in one loop that interpolates, recurses, reduces the
 //! outputs (a [`StepSink`]) and accumulates the divergence test, with the state in registers.
 //! Written once over [`Vector`] and compiled per instruction set ([`crate::simd::run_widest`]).
@@ -10,6 +11,7 @@ use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::Vector;
 use crate::simd::{LANES, Lanes};
+use crate::surrogate::damper_law::law_lanes;
 use crate::surrogate::narx::DIVERGENCE_BOUND;
 use crate::wind::CubicSchedule;
 
@@ -18,8 +20,8 @@ const DENSE_MODES: usize = 3;
 const DENSE_LAGS: usize = 2;
 
 /// The models of a batch as dense coefficient arrays, zero where a term is absent, when every term
-/// is the constant, Q_m(t − k) or y_s(t − k) with k ≤ [`DENSE_LAGS`] — which is what the paper's
-/// structures select. With the modes and lags then fixed at compile time ([`advance`]) the last
+/// is the constant, Q_m(t − k), y_s(t − k) with k ≤ [`DENSE_LAGS`] or D(y_s(t − 1) − y_s(t − 2)) —
+/// which is what the paper's structures select, with or without the dampers' law. With the modes and lags then fixed at compile time ([`advance`]) the last
 /// outputs are kept in local variables the compiler can hold in registers, instead of being read
 /// back from the output buffer every step.
 pub(super) struct DenseLinear {
@@ -36,6 +38,20 @@ pub(super) struct DenseLinear {
     /// the paper's structures select: higher modes read lower ones, not the reverse. The
     /// recursion then skips the zeros, a sixth of its operations on three modes.
     lower: bool,
+    /// The dampers' law terms, where any mode has one.
+    law: Option<DenseLaw>,
+}
+
+/// The terms c·D(Δ_s) of the dampers' law, Δ_s = y_s(t − 1) − y_s(t − 2): one power per source mode
+/// and step, shared by every mode that reads it.
+struct DenseLaw {
+    /// coefficient[m·M + s]: coefficient of D(Δ_s) in mode m.
+    coefficient: Vec<Lanes>,
+    /// Whether any mode reads D(Δ_s).
+    read: Vec<bool>,
+    /// κ_s, the law's knee of each source mode.
+    knees: Vec<f64>,
+    exponent: f64,
 }
 
 impl DenseLinear {
@@ -57,6 +73,7 @@ impl DenseLinear {
             input: vec![[0.0; LANES]; slots * modes],
             output: vec![[0.0; LANES]; slots * modes * modes],
             lower: false,
+            law: None,
         };
         for (m, program) in programs.iter().enumerate() {
             for (k, t) in program.terms.iter().enumerate() {
@@ -65,6 +82,18 @@ impl DenseLinear {
                     (0, 1) => &mut dense.input[t.input_lag * modes + m],
                     (1, 0) if t.output_lag >= 1 && t.damper.is_none() => {
                         &mut dense.output[(t.output_lag * modes + m) * modes + t.output_mode.unwrap_or(m)]
+                    }
+                    (1, 0) if t.output_lag == 1 => {
+                        let law = program.law.expect("a damper term runs with its damper law");
+                        let source = t.output_mode.unwrap_or(m);
+                        let dense_law = dense.law.get_or_insert_with(|| DenseLaw {
+                            coefficient: vec![[0.0; LANES]; modes * modes],
+                            read: vec![false; modes],
+                            knees: law.knees.clone(),
+                            exponent: law.exponent,
+                        });
+                        dense_law.read[source] = true;
+                        &mut dense_law.coefficient[m * modes + source]
                     }
                     _ => return None,
                 };
@@ -171,6 +200,15 @@ fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOW
             }
         }
     }
+    let minus_one = V::splat(isa, -1.0);
+    let mut law_coefficient = [[zero; M]; M];
+    if let Some(law) = &dense.law {
+        for m in 0..M {
+            for s in 0..M {
+                law_coefficient[m][s] = V::load(isa, &law.coefficient[m * M + s]);
+            }
+        }
+    }
     let Carry { mut last, mut before, mut last_input, mut before_input } = *carry;
     let mut squares = zero;
     schedule.for_each(
@@ -184,6 +222,22 @@ fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOW
                 q[m] = interpolate(isa, modes[m], p, &w);
             }
             let mut next = constant;
+            if let Some(law) = &dense.law {
+                // D(Δ_s) of every lane, vectorised, as the scalar free run and the term lists form it.
+                let mut laws = [zero; M];
+                for s in 0..M {
+                    if law.read[s] {
+                        let mut difference = [0.0; LANES];
+                        minus_one.mul_add(before[s], last[s]).store(&mut difference);
+                        laws[s] = V::load(isa, &law_lanes(difference, law.knees[s], law.exponent));
+                    }
+                }
+                for m in 0..M {
+                    for s in 0..M {
+                        next[m] = law_coefficient[m][s].mul_add(laws[s], next[m]);
+                    }
+                }
+            }
             for m in 0..M {
                 next[m] = input[0][m].mul_add(q[m], next[m]);
                 if KI > 1 {

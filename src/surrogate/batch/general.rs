@@ -8,7 +8,7 @@ use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::{LANES, Lanes};
-use crate::surrogate::damper_law::secant;
+use crate::surrogate::damper_law::law_lanes;
 
 /// A term with its sources resolved and its coefficient in every lane.
 #[derive(Debug, Clone, Copy)]
@@ -172,10 +172,10 @@ fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: 
             for term in &lists.damper[m] {
                 let near = &outputs[here - term.lag * modes + term.source];
                 let far = &outputs[here - (term.lag + 1) * modes + term.source];
+                let difference: Lanes = std::array::from_fn(|l| near[l] - far[l]);
+                let law = law_lanes(difference, term.knee, lists.exponent);
                 for l in 0..LANES {
-                    let difference = near[l] - far[l];
-                    let g = difference * secant(difference, term.knee, lists.exponent);
-                    value[l] = term.coefficient[l].mul_add(g, value[l]);
+                    value[l] = term.coefficient[l].mul_add(law[l], value[l]);
                 }
             }
             for term in &lists.feedback[m] {

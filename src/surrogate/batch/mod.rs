@@ -109,6 +109,7 @@ fn joint_rest(models: &[(&[NarxTerm], &[f64])]) -> Result<Vec<f64>> {
 mod tests {
     use super::*;
     use crate::wind::ModalForces;
+    use crate::surrogate::DamperLaw;
 
     /// Two coupled modes run jointly equal a hand-written recursion, in every lane, each lane with
     /// its own coefficients; blocks boundaries do not show; the blocks carry the inputs read.
@@ -208,13 +209,11 @@ mod tests {
     }
 
     /// Damper terms (a mode's own law and another's) run in the batch as in the scalar free run the
-    /// calibration fits them with.
+    /// calibration fits them with: by the dense recursion, and by the term lists when another term
+    /// (a cubic stiffness) keeps the models out of it.
     #[test]
     fn damper_terms_run_as_in_the_scalar_free_run() {
-        use crate::surrogate::DamperLaw;
-        use crate::surrogate::identify::{Record, simulate};
         use crate::surrogate::narx::DamperTerm;
-        use std::sync::Arc;
         let law = DamperLaw { exponent: 0.38, knees: vec![2e-3, 5e-3] };
         let a = [
             NarxTerm::input(0, 1),
@@ -228,15 +227,33 @@ mod tests {
             NarxTerm::output(2, 1, None),
             NarxTerm::damper(DamperTerm::Law, 1, Some(0)),
         ];
-        let steps = 3000;
-        let series =
-            |f: f64| -> Vec<f64> { (0..steps).map(|t| (t as f64 * f).sin() + 0.3 * (t as f64 * 0.17).cos()).collect() };
-        let forces = ModalForces { mean: vec![0.0, 0.0], series: vec![series(0.011), series(0.029)] };
+        let theta = vec![vec![0.004, 1.985, -0.9905, -0.003], vec![0.02, 1.95, -0.96, 0.002]];
+        let dense = |programs: &[ModeProgram]| DenseLinear::new(programs, |_, _| [0.0; LANES]).is_some();
         let programs = [
             ModeProgram { terms: &a, input_scale: 1.0, law: Some(&law) },
             ModeProgram { terms: &b, input_scale: 1.0, law: Some(&law) },
         ];
-        let theta = vec![vec![0.004, 1.985, -0.9905, -0.003], vec![0.02, 1.95, -0.96, 0.002]];
+        assert!(dense(&programs));
+        agrees_with_the_scalar_free_run(&programs, theta.clone(), &law);
+        let cubic: Vec<NarxTerm> = a.iter().copied().chain([NarxTerm::output(1, 3, None)]).collect();
+        let programs = [
+            ModeProgram { terms: &cubic, input_scale: 1.0, law: Some(&law) },
+            ModeProgram { terms: &b, input_scale: 1.0, law: Some(&law) },
+        ];
+        assert!(!dense(&programs));
+        let mut theta = theta;
+        theta[0].push(-0.5);
+        agrees_with_the_scalar_free_run(&programs, theta, &law);
+    }
+
+    /// The batch's outputs of one sample agree with the scalar free run's, mode by mode.
+    fn agrees_with_the_scalar_free_run(programs: &[ModeProgram], theta: Vec<Vec<f64>>, law: &DamperLaw) {
+        use crate::surrogate::identify::{Record, simulate};
+        use std::sync::Arc;
+        let steps = 3000;
+        let series =
+            |f: f64| -> Vec<f64> { (0..steps).map(|t| (t as f64 * f).sin() + 0.3 * (t as f64 * 0.17).cos()).collect() };
+        let forces = ModalForces { mean: vec![0.0, 0.0], series: vec![series(0.011), series(0.029)] };
         let samples = [BatchSample { theta: theta.clone(), forces: &forces }];
         let mut got = vec![vec![0.0; steps]; 2];
         let mut consume = |first: usize, outputs: &[Lanes], _: &[Lanes]| {
@@ -244,11 +261,11 @@ mod tests {
                 got[k % 2][first + k / 2] = lanes[0];
             }
         };
-        run(&programs, &samples, steps, 0.01, &mut BatchWorkspace::default(), &mut Sink::Blocks(&mut consume)).unwrap();
+        run(programs, &samples, steps, 0.01, &mut BatchWorkspace::default(), &mut Sink::Blocks(&mut consume)).unwrap();
         assert!(got[0].iter().any(|v| v.abs() > 0.05) && got[1].iter().any(|v| v.abs() > 0.05));
         let law = Arc::new(law.clone());
         let outputs: Vec<Arc<[f64]>> = got.iter().map(|o| o[..].into()).collect();
-        for (m, terms) in [&a[..], &b[..]].into_iter().enumerate() {
+        for (m, terms) in programs.iter().map(|p| p.terms).enumerate() {
             let record = Record {
                 mode: m,
                 law: Some(law.clone()),
