@@ -100,8 +100,8 @@ pub struct ResponseArgs {
     /// group (1-based) instead of one floor's damper.
     #[arg(long, conflicts_with = "floor")]
     pub group: Option<usize>,
-    /// The response: displacement, drift, acceleration, damper_force or damper_stroke (the
-    /// damper in the storey below the floor, or a group's with --group).
+    /// The response: displacement, drift, acceleration, rms_acceleration, damper_force or
+    /// damper_stroke (the damper in the storey below the floor, or a group's with --group).
     #[arg(long, default_value = "displacement", conflicts_with = "drift")]
     pub response: String,
     /// The inter-storey drift below the floor (the same as --response drift).

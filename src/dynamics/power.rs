@@ -101,8 +101,9 @@ mod tests {
     #[test]
     fn lanes_agree_with_the_scalar_power() {
         for i in 0..20_000 {
-            let x: [f64; 8] =
-                std::array::from_fn(|l| if (i + l) % 97 == 0 { 0.0 } else { 10f64.powf(-12.0 + (i * 8 + l) as f64 * 1.5e-4) });
+            let x: [f64; 8] = std::array::from_fn(|l| {
+                if (i + l) % 97 == 0 { 0.0 } else { 10f64.powf(-12.0 + (i * 8 + l) as f64 * 1.5e-4) }
+            });
             let lanes = power_lanes(x, -0.31);
             for l in 0..8 {
                 assert_eq!(lanes[l].to_bits(), power(x[l], -0.31).to_bits(), "{}", x[l]);

@@ -405,6 +405,6 @@ pub fn assemble(
             modes: diagnostics,
             seconds,
         },
-        low_wind: Default::default(),
+        wind_continuation: Default::default(),
     })
 }

@@ -337,9 +337,11 @@ fn every_response_is_sampled() {
 /// ln v along the secant from the design's median speed to its lowest (the Fréchet germ is −227
 /// at 12 m/s, where the expansions mean nothing and free runs diverged), while the storm's own
 /// forces carry the load's fall: the metamodel answers at 12 m/s and its peaks follow the
-/// reference's. Inside and above the design the germ is the marginal's.
+/// reference's. Inside and above the design the germ is the marginal's, except for models with
+/// the dampers' law terms, whose expansions are continued above the design the same way, along
+/// the secant from the median speed to the highest.
 #[test]
-fn winds_below_the_design_continue_the_expansions_linearly_in_ln_v() {
+fn winds_outside_the_design_continue_the_expansions_linearly_in_ln_v() {
     let (metamodel, study) = fixture::metamodel();
     let index = study.inputs.index_of("wind_speed").unwrap();
     let [lowest, highest] = metamodel.calibrated_range(study, "wind_speed").unwrap();
@@ -374,6 +376,19 @@ fn winds_below_the_design_continue_the_expansions_linearly_in_ln_v() {
         for (k, own) in own.iter().enumerate().filter(|(k, _)| *k != index) {
             assert_eq!((at_lowest[k], at_median[k]), (*own, *own), "input {k}");
         }
+    }
+    let mut with_law = metamodel.clone();
+    with_law.damper_law =
+        Some(windmeta::surrogate::DamperLaw { exponent: 0.38, knees: vec![1e-4; metamodel.models.len()] });
+    let wind_germ = |v: f64| study.inputs.to_standard(&at(v))[index];
+    assert_eq!(with_law.germ(study, &at(highest)), vec![(1.0, study.inputs.to_standard(&at(highest)))]);
+    for v in [highest * (1.0 + 1e-9), highest + 20.0] {
+        let germ = with_law.germ(study, &at(v));
+        let [(w_median, at_median), (w_highest, at_highest)] = &germ[..] else { panic!("{germ:?}") };
+        let expected = (v / median).ln() / (highest / median).ln();
+        assert!(expected > 1.0 && (w_highest - expected).abs() < 1e-12, "{germ:?}");
+        assert!((w_median + w_highest - 1.0).abs() < 1e-12, "{germ:?}");
+        assert_eq!((at_median[index], at_highest[index]), (wind_germ(median), wind_germ(highest)));
     }
     // Continuous at the design's edge: just below it the coefficients are the lowest speed's.
     let edge = metamodel.coefficients(&metamodel.germ(study, &at(lowest)));

@@ -108,8 +108,8 @@ fn joint_rest(models: &[(&[NarxTerm], &[f64])]) -> Result<Vec<f64>> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::wind::ModalForces;
     use crate::surrogate::DamperLaw;
+    use crate::wind::ModalForces;
 
     /// Two coupled modes run jointly equal a hand-written recursion, in every lane, each lane with
     /// its own coefficients; blocks boundaries do not show; the blocks carry the inputs read.
