@@ -246,7 +246,7 @@ impl Metamodel {
     /// they are; those of models with the dampers' law terms do not (at 60 m/s, from a design up to
     /// 46 m/s, median peak roof displacement error 3.4 %, correlation 0.85) and are continued the
     /// same way along the secant from the median speed to the highest (1.1 %, 0.988). The paper
-    /// dictionary's are not: continued, its acceleration's and RMS acceleration's errors grew
+    /// dictionary's are not: continued, their displacement's and RMS acceleration's errors grew
     /// (docs/method.md).
     ///
     /// The continuation's speeds are found once per metamodel, from its design (the design

@@ -1,8 +1,8 @@
 //! The free run of the paper's structures: every term the constant, Q_m(t − k), y_s(t − k) with
 //! k ≤ [`DENSE_LAGS`] or the dampers' law D(Δ_s) of a mode's last first difference, on at most
-//! [`DENSE_MODES`] modes, run as dense coefficient arrays with
-//! the modes and lags fixed at compile time, in one loop that interpolates, recurses, reduces the
-//! outputs (a [`StepSink`]) and accumulates the divergence test, with the state in registers.
+//! [`DENSE_MODES`] modes, run as dense coefficient arrays with the modes and lags fixed at compile
+//! time, in one loop that interpolates, recurses, reduces the outputs (a [`StepSink`]) and
+//! accumulates the divergence test, with the state in registers.
 //! Written once over [`Vector`] and compiled per instruction set ([`crate::simd::run_widest`]).
 
 use super::ModeProgram;
@@ -21,9 +21,10 @@ const DENSE_LAGS: usize = 2;
 
 /// The models of a batch as dense coefficient arrays, zero where a term is absent, when every term
 /// is the constant, Q_m(t − k), y_s(t − k) with k ≤ [`DENSE_LAGS`] or D(y_s(t − 1) − y_s(t − 2)) —
-/// which is what the paper's structures select, with or without the dampers' law. With the modes and lags then fixed at compile time ([`advance`]) the last
-/// outputs are kept in local variables the compiler can hold in registers, instead of being read
-/// back from the output buffer every step.
+/// which is what the paper's structures select, with or without the dampers' law. With the modes
+/// and lags then fixed at compile time ([`advance`]) the last outputs are kept in local variables
+/// the compiler can hold in registers, instead of being read back from the output buffer every
+/// step.
 pub(super) struct DenseLinear {
     /// Lag slots K = longest lag + 1 (slot 0 is the present, read only by input terms).
     slots: usize,
