@@ -2,6 +2,7 @@
 //! annual curves and return levels under a wind climate, fragility curves, Sobol indices, and the
 //! validation of a metamodel against the reference.
 
+mod certify;
 mod climate;
 mod exceedance;
 mod fragility;
@@ -11,6 +12,7 @@ mod peaks;
 mod plot;
 mod profile;
 mod reference;
+mod reference_storms;
 mod response;
 mod sampling;
 mod sobol;
@@ -18,10 +20,14 @@ mod strata;
 mod validated_responses;
 mod validation;
 
+pub use certify::{
+    Certification, CertifyOptions, MAX_REFERENCE_STORMS, PairedPeak, certified_curve, certify_exceedance,
+    check_reference_storms,
+};
 pub use climate::{ClimateCoverage, ClimateSpec, annual_probability_of_period, period_of_annual_probability};
 pub use exceedance::{
     ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,
-    exceedance_curve, max_exceedance_gap,
+    exceedance_csv, exceedance_curve, max_exceedance_gap,
 };
 pub use fragility::{
     Fragility, FragilityCurve, FragilityOptions, LognormalFragility, MAX_WIND_SPEEDS, fragility, metamodel_fragility,
@@ -34,6 +40,7 @@ pub use peaks::{PeakSummary, pearson, quantile};
 pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validation_svg};
 pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
 pub use reference::{reference_history, reference_peak};
+pub use reference_storms::{paired_peaks, reference_storm_seed};
 pub use response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_GRAVITY};
 pub use sampling::{
     DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, check_samples, describe_diverged, metamodel_peaks, peaks_at,

@@ -1,8 +1,8 @@
 //! Arguments shared by the commands: the study, the response, the output file.
 
-use crate::analysis::{Response, ResponseKind};
+use crate::analysis::{CertifyOptions, Response, ResponseKind};
 use crate::error::{Error, Result};
-use crate::study::{Study, StudySpec};
+use crate::study::{Order, Study, StudySpec};
 use crate::uncertainty::{InputModel, parse_assignment};
 use clap::Args;
 use std::path::PathBuf;
@@ -113,6 +113,27 @@ impl ResponseArgs {
     pub fn response(&self, study: &Study) -> Result<Response> {
         let kind = if self.drift { ResponseKind::Drift } else { ResponseKind::parse(&self.response)? };
         kind.located(self.floor, self.group, &study.structure)
+    }
+}
+
+/// A certified answer: storms run through the reference model as well, so that the probabilities
+/// carry the metamodel's own error.
+#[derive(Debug, Clone, Args)]
+pub struct CertifyArgs {
+    /// Certify the answer with N storms run through both the reference model and the metamodel
+    /// (unbiased for the reference model, its band holding the metamodel's error; at most 5 000).
+    #[arg(long, value_name = "N")]
+    pub certify: Option<usize>,
+    /// The reference model of --certify: reduced (the retained modes) or full (every floor).
+    #[arg(long, default_value = "reduced", value_parser = ["reduced", "full"], requires = "certify")]
+    pub certify_order: String,
+}
+
+impl CertifyArgs {
+    /// The certification asked for, if any.
+    pub fn options(&self) -> Option<CertifyOptions> {
+        let order = if self.certify_order == "full" { Order::Full } else { Order::Reduced };
+        self.certify.map(|reference_storms| CertifyOptions { reference_storms, order })
     }
 }
 

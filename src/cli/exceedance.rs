@@ -1,11 +1,11 @@
 //! `windmeta exceedance`: the exceedance curve of a peak response, sampled from a metamodel.
 
-use super::args::{ResponseArgs, SamplingArgs, out_format, write_out};
+use super::args::{CertifyArgs, ResponseArgs, SamplingArgs, out_format, write_out};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    ExceedanceCurve, Response, STANDARD_GRAVITY, automatic_thresholds, check_confidence, exceedance_curve,
-    exceedance_svg, metamodel_peaks,
+    STANDARD_GRAVITY, automatic_thresholds, certify_exceedance, check_confidence, check_reference_storms,
+    exceedance_csv, exceedance_curve, exceedance_svg, metamodel_peaks,
 };
 use crate::error::{Error, Result};
 use clap::Args;
@@ -27,17 +27,11 @@ pub struct ExceedanceArgs {
     /// Confidence level of the band.
     #[arg(long, default_value_t = 0.95)]
     pub confidence: f64,
+    #[command(flatten)]
+    pub certify: CertifyArgs,
     /// Write the curve: .csv, .json or .svg by extension.
     #[arg(long)]
     pub out: Option<PathBuf>,
-}
-
-fn csv_text(curve: &ExceedanceCurve, response: &Response) -> String {
-    let mut out = format!("threshold_{},probability,lower,upper\n", response.unit_tag());
-    for i in 0..curve.thresholds.len() {
-        out += &format!("{},{},{},{}\n", curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]);
-    }
-    out
 }
 
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
@@ -51,34 +45,72 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     {
         return Err(Error::invalid("thresholds", "must be a non-empty list of finite numbers"));
     }
+    let certify = args.certify.options();
+    if let Some(options) = &certify {
+        check_reference_storms(options.reference_storms, args.sampling.samples, "certify")?;
+    }
     let started = Instant::now();
-    let peaks =
-        metamodel_peaks(&metamodel, &study, &inputs, args.sampling.samples, args.seed, response, &Counter(started))?;
-    let seconds = started.elapsed().as_secs_f64();
+    let counter = Counter(started);
+    let peaks = metamodel_peaks(&metamodel, &study, &inputs, args.sampling.samples, args.seed, response, &counter)?;
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-    let curve = exceedance_curve(&peaks, &thresholds, args.confidence);
+    let (curve, certification) = match &certify {
+        None => (exceedance_curve(&peaks, &thresholds, args.confidence), None),
+        Some(options) => {
+            let (seed, confidence) = (args.seed, args.confidence);
+            let (curve, certification) = certify_exceedance(
+                &metamodel,
+                &study,
+                &inputs,
+                &peaks,
+                &thresholds,
+                options,
+                seed,
+                response,
+                confidence,
+                &counter,
+            )?;
+            (curve, Some(certification))
+        }
+    };
+    let seconds = started.elapsed().as_secs_f64();
     let what = response.per_storm();
     if let (Some(path), Some(format)) = (&args.out, format) {
         let text = match format.as_str() {
-            "csv" => csv_text(&curve, &response),
-            "json" => serde_json::to_string_pretty(&json!({"response": response, "curve": curve, "seconds": seconds}))
-                .expect("plain JSON"),
-            _ => exceedance_svg(&[("PC-NARX", &curve)], &format!("{what} x ({})", response.unit())),
+            "csv" => exceedance_csv(&curve, certification.as_ref(), &response),
+            "json" => serde_json::to_string_pretty(
+                &json!({"response": response, "curve": curve, "certification": certification, "seconds": seconds}),
+            )
+            .expect("plain JSON"),
+            _ => {
+                let label = format!("{what} x ({})", response.unit());
+                match &certification {
+                    None => exceedance_svg(&[("PC-NARX", &curve)], &label),
+                    Some(c) => {
+                        exceedance_svg(&[("PC-NARX", &c.metamodel_curve(&curve)), ("certified", &curve)], &label)
+                    }
+                }
+            }
         };
         write_out(path, &text)?;
     }
     let mut out = format!("{what}: {} samples in {seconds:.2} s\n", args.sampling.samples);
-    out += &format!(
-        "{:>12}  {:>10}  {:>10}  {:>10}\n",
-        &format!("x ({})", response.unit()),
-        "P(peak>x)",
-        "lower",
-        "upper"
-    );
+    if let Some(c) = &certification {
+        out += &format!(
+            "certified with {} storms through the {} reference model as well\n",
+            c.reference_storms,
+            if c.order == crate::study::Order::Full { "full-order" } else { "reduced-order" }
+        );
+    }
+    out +=
+        &format!("{:>12}  {:>10}  {:>10}  {:>10}", &format!("x ({})", response.unit()), "P(peak>x)", "lower", "upper");
     let milli_g = response.is_acceleration();
     if milli_g {
-        out.insert_str(out.len() - 1, &format!("  {:>10}", "x (milli-g)"));
+        out += &format!("  {:>11}", "x (milli-g)");
     }
+    if certification.is_some() {
+        out += &format!("  {:>10}  {:>10}", "metamodel", "mismatch");
+    }
+    out += "\n";
     let step = (thresholds.len() / 12).max(1);
     for i in (0..thresholds.len()).step_by(step) {
         out += &format!(
@@ -87,6 +119,9 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
         );
         if milli_g {
             out += &format!("  {:>11.2}", curve.thresholds[i] / STANDARD_GRAVITY * 1e3);
+        }
+        if let Some(c) = &certification {
+            out += &format!("  {:>10.4}  {:>10.4}", c.metamodel_probabilities[i], c.mismatch_rate[i]);
         }
         out += "\n";
     }

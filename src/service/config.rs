@@ -51,6 +51,10 @@ pub struct ServeArgs {
     /// two cores at full size for 100 000).
     #[arg(long, env = "WINDMETA_MAX_ANALYSIS_STORMS", default_value_t = 100_000)]
     pub max_analysis_storms: usize,
+    /// Most storms one certified request may run through the reference model (each about as
+    /// costly as a few hundred metamodel storms); at most 5 000.
+    #[arg(long, env = "WINDMETA_MAX_REFERENCE_STORMS", default_value_t = 1_000)]
+    pub max_reference_storms: usize,
     /// Exceedance requests up to this many samples are answered at once; larger ones (and any
     /// with `Prefer: respond-async`) run as operations.
     #[arg(long, env = "WINDMETA_MAX_SYNC_SAMPLES", default_value_t = 2_000)]
@@ -133,6 +137,7 @@ impl ServeArgs {
             ("max_body_bytes", self.max_body_bytes),
             ("max_samples", self.max_samples),
             ("max_analysis_storms", self.max_analysis_storms),
+            ("max_reference_storms", self.max_reference_storms),
             ("max_queued_jobs", self.max_queued_jobs),
             ("max_experiments", self.max_experiments),
             ("max_event_streams", self.max_event_streams),

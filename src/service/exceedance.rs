@@ -8,8 +8,9 @@ use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
 use crate::analysis::exceedance_svg;
 use crate::analysis::{
-    PeakProfile, Response, ResponseKind, ResponseName, automatic_thresholds, check_confidence, check_quantile,
-    check_thresholds, exceedance_curve, metamodel_peaks, metamodel_profiles,
+    Certification, CertifyOptions, PeakProfile, Response, ResponseKind, ResponseName, automatic_thresholds,
+    certify_exceedance, check_confidence, check_quantile, check_reference_storms, check_thresholds, exceedance_csv,
+    exceedance_curve, metamodel_peaks, metamodel_profiles,
 };
 use crate::error::{Error, Result, require_finite};
 use crate::progress::Observer;
@@ -59,6 +60,10 @@ pub struct ExceedanceRequest {
     /// storey), with a distribution-free band at `confidence`, from the same storms as the curve.
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1)]
     pub profile_quantile: Option<f64>,
+    /// Certify the curve: this many further storms run through both the reference model and the
+    /// metamodel correct it, so that its probabilities are unbiased for the reference model and
+    /// their band holds the metamodel's own error. A certified request always runs as an operation.
+    pub certify: Option<CertifyOptions>,
 }
 
 impl Default for ExceedanceRequest {
@@ -73,6 +78,7 @@ impl Default for ExceedanceRequest {
             fixed: BTreeMap::new(),
             confidence: 0.95,
             profile_quantile: None,
+            certify: None,
         }
     }
 }
@@ -99,6 +105,9 @@ impl ExceedanceRequest {
         }
         for (name, value) in &self.fixed {
             require_finite(&format!("fixed.{name}"), *value)?;
+        }
+        if let Some(certify) = &self.certify {
+            check_certify(certify, self.samples, config)?;
         }
         Ok(())
     }
@@ -138,9 +147,42 @@ impl ExceedanceRequest {
             }
         };
         let thresholds = self.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-        let curve = exceedance_curve(&peaks, &thresholds, self.confidence);
-        Ok(ExceedanceAnswer { curve, response, profile, metamodel_id: metamodel_id.to_string() })
+        let (curve, certification) = match &self.certify {
+            None => (exceedance_curve(&peaks, &thresholds, self.confidence), None),
+            Some(options) => {
+                let (seed, confidence) = (self.seed, self.confidence);
+                let (curve, certification) = certify_exceedance(
+                    metamodel,
+                    study,
+                    &inputs,
+                    &peaks,
+                    &thresholds,
+                    options,
+                    seed,
+                    response,
+                    confidence,
+                    observer,
+                )?;
+                (curve, Some(certification))
+            }
+        };
+        let metamodel_id = metamodel_id.to_string();
+        Ok(ExceedanceAnswer { curve, response, profile, certification, metamodel_id })
     }
+}
+
+/// Errs, naming the field, unless a certification's reference storms are within the contract's
+/// and the server's bounds and no more than the request's metamodel storms.
+pub fn check_certify(certify: &CertifyOptions, samples: usize, config: &ServeArgs) -> Result<()> {
+    let storms = certify.reference_storms;
+    check_reference_storms(storms, samples, "certify.reference_storms")?;
+    if storms > config.max_reference_storms {
+        return Err(Error::invalid(
+            "certify.reference_storms",
+            format!("{storms} reference storms; this server allows at most {}", config.max_reference_storms),
+        ));
+    }
+    Ok(())
 }
 
 /// The study's input model with the `fixed` inputs held; errors name `fixed.<input>`.
@@ -166,6 +208,10 @@ pub struct ExceedanceAnswer {
     /// The quantile profile, when the request asked for one.
     #[serde(skip_serializing_if = "Option::is_none", default)]
     pub profile: Option<PeakProfile>,
+    /// What the reference storms did, when the request asked for a certified curve (whose
+    /// `probabilities`, `lower` and `upper` are then the certified ones).
+    #[serde(skip_serializing_if = "Option::is_none", default)]
+    pub certification: Option<Certification>,
     pub metamodel_id: String,
 }
 
@@ -175,17 +221,14 @@ impl ExceedanceAnswer {
         let curve = &self.curve;
         match rendering {
             Rendering::Json => ("application/json", serde_json::to_string(self).expect("a curve serialises")),
-            Rendering::Csv => {
-                let mut text = format!("threshold_{},probability,lower,upper\n", self.response.unit_tag());
-                for i in 0..curve.thresholds.len() {
-                    let row = [curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]];
-                    text += &format!("{},{},{},{}\n", row[0], row[1], row[2], row[3]);
-                }
-                ("text/csv", text)
-            }
+            Rendering::Csv => ("text/csv", exceedance_csv(curve, self.certification.as_ref(), &self.response)),
             Rendering::Svg => {
                 let label = format!("{} x ({})", self.response.per_storm(), self.response.unit());
-                ("image/svg+xml", exceedance_svg(&[("PC-NARX", curve)], &label))
+                let svg = match &self.certification {
+                    None => exceedance_svg(&[("PC-NARX", curve)], &label),
+                    Some(c) => exceedance_svg(&[("PC-NARX", &c.metamodel_curve(curve)), ("certified", curve)], &label),
+                };
+                ("image/svg+xml", svg)
             }
         }
     }

@@ -35,7 +35,8 @@ pub enum Order {
 pub struct StormRun {
     /// Roof displacement history (m), static part included.
     pub roof: Vec<f64>,
-    /// Modal forces that drove it (absent for full-order runs from the field).
+    /// Modal forces that drove it (for a full-order run, its floor forces projected on the
+    /// retained modes: what a metamodel sees of the same storm).
     pub modal_forces: Option<ModalForces>,
     /// Modal displacements and the integrator's velocities of a reduced-order run.
     pub modal_motion: Option<ModalMotion>,
@@ -126,7 +127,7 @@ impl Study {
                 let roof = response.displacements.last().cloned().unwrap_or_default();
                 Ok(StormRun {
                     roof,
-                    modal_forces: None,
+                    modal_forces: Some(forces.project(self.modes.shapes.as_ref())),
                     modal_motion: None,
                     floor_motion: Some(response),
                     wind_seconds,

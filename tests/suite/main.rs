@@ -9,6 +9,7 @@ mod harness;
 mod api;
 mod browser;
 mod cancellation;
+mod certify;
 mod cli;
 mod dynamics;
 mod edge;

@@ -46,7 +46,7 @@ async fn analyse(
     let work: Work = Box::new(move |metamodel, study, observer, rendering| {
         Ok(request.answer(metamodel, study, &id, observer)?.render(rendering))
     });
-    answer_or_queue(&state, &headers, loaded, storms, queued, work).await
+    answer_or_queue(&state, &headers, loaded, Some(storms), queued, work).await
 }
 
 /// The annual exceedance curve of a peak response under a wind climate, with its band, return

@@ -145,7 +145,8 @@ async fn exceedance_curve(
     request.check(&state.config)?;
     let loaded = load(&state, &id).await?;
     request.check_against(&loaded.1)?;
-    let storms = request.samples;
+    // Reference storms take minutes: a certified curve is always an operation.
+    let storms = if request.certify.is_some() { None } else { Some(request.samples) };
     let queued = {
         let (id, request) = (id.clone(), request.clone());
         move || Queued {

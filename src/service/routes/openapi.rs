@@ -59,6 +59,8 @@ pub fn state_configured_limits(spec: &mut utoipa::openapi::OpenApi, config: &Ser
     let experiments = config.max_experiments.min(crate::surrogate::MAX_EXPERIMENTS);
     set_maximum(spec, "CalibrationRequest", "experiments", experiments);
     set_maximum(spec, "ExceedanceRequest", "samples", config.max_samples.min(crate::analysis::MAX_SAMPLES));
+    let reference_storms = config.max_reference_storms.min(crate::analysis::MAX_REFERENCE_STORMS);
+    set_maximum(spec, "CertifyOptions", "reference_storms", reference_storms);
 }
 
 /// Sets the maximum of a request property, where the description has the request (a worker

@@ -43,19 +43,20 @@ pub type Work = Box<
     dyn FnOnce(&Metamodel, &Study, &dyn Observer, Rendering) -> crate::error::Result<(&'static str, String)> + Send,
 >;
 
-/// Answers with `work` at once when `storms` is within the synchronous limit and the client did
-/// not prefer otherwise; queues `queued` as an operation (202) when not.
+/// Answers with `work` at once when its metamodel `storms` are within the synchronous limit and
+/// the client did not prefer otherwise; queues `queued` as an operation (202) when not, and always
+/// when `storms` is `None` (a request that runs reference storms too).
 pub async fn answer_or_queue(
     state: &AppState,
     headers: &HeaderMap,
     loaded: Loaded,
-    storms: usize,
+    storms: Option<usize>,
     queued: impl FnOnce() -> Queued,
     work: Work,
 ) -> Result<HttpResponse, ApiError> {
     // A key is only used when the request is queued, but a malformed one is refused either way.
     idempotency_key(headers)?;
-    if storms > state.config.max_sync_samples || prefers_async(headers) {
+    if storms.is_none_or(|storms| storms > state.config.max_sync_samples) || prefers_async(headers) {
         let Queued { endpoint, kind, job } = queued();
         return accept_job(state, headers, endpoint, kind, job).await;
     }

@@ -1,0 +1,133 @@
+//! Certified curves on the shared fixture: the reference storms pair with the storms the metamodel
+//! itself would draw, the certified curve agrees with plain reference Monte Carlo within its band,
+//! and over HTTP a certified request is an operation whose answer carries the correction, its
+//! bad input refused naming the field.
+
+use crate::harness::app::{assert_problem, database, problem_details, spawn_app};
+use crate::harness::fixture;
+use serde_json::{Value, json};
+use std::time::Duration;
+use windmeta::analysis::{
+    CertifyOptions, Draws, OnDivergence, Response, certify_exceedance, paired_peaks, peaks_at, reference_storm_seed,
+};
+use windmeta::progress::Silent;
+use windmeta::study::Order;
+use windmeta::uncertainty::{monte_carlo, rng_from_seed};
+
+/// The estimator is unbiased only if the paired storms' metamodel peaks are what the metamodel's
+/// own sampling gives for the same inputs and winds: the scalar free run on the reference's forces
+/// against the batched one on its own, storm by storm.
+#[test]
+fn reference_storms_pair_with_the_metamodels_own_storms() {
+    let (metamodel, study) = fixture::metamodel();
+    let roof = Response::Displacement { floor: study.structure.floors() };
+    let seed = reference_storm_seed(3);
+    let paired = paired_peaks(metamodel, study, &study.inputs, 24, seed, roof, Order::Reduced, &Silent).unwrap();
+    let rows = monte_carlo(&study.inputs, 24, &mut rng_from_seed(seed));
+    let storms: Vec<usize> = (0..24).collect();
+    let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
+    let batched = peaks_at(metamodel, &draws, roof, &Silent).unwrap();
+    for (pair, batched) in paired.iter().zip(&batched) {
+        assert!((pair.metamodel - batched).abs() <= 1e-9 * batched, "{pair:?} against {batched}");
+        // And the two models see the same storm (the fixture's peak error is about 0.3 %).
+        assert!((pair.metamodel / pair.reference - 1.0).abs() < 0.05, "{pair:?}");
+    }
+}
+
+/// The certified curve (600 metamodel storms, 120 through both models) against 600 other storms
+/// through the reference alone: at every threshold the two differ by less than 2.5 standard
+/// errors of their difference (the certified band's and the binomial one's, independent draws).
+#[test]
+fn the_certified_curve_agrees_with_reference_monte_carlo() {
+    let (metamodel, study) = fixture::metamodel();
+    let acceleration = Response::Acceleration { floor: study.structure.floors() };
+    let (samples, seed) = (600, 8);
+    let rows = monte_carlo(&study.inputs, samples, &mut rng_from_seed(seed));
+    let storms: Vec<usize> = (0..samples).collect();
+    let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
+    let peaks = peaks_at(metamodel, &draws, acceleration, &Silent).unwrap();
+    let mut sorted = peaks.clone();
+    sorted.sort_by(f64::total_cmp);
+    let thresholds: Vec<f64> = [0.2, 0.5, 0.8].iter().map(|q| sorted[(q * samples as f64) as usize]).collect();
+    let options = CertifyOptions { reference_storms: 120, order: Order::Reduced };
+    let (curve, certification) = certify_exceedance(
+        metamodel,
+        study,
+        &study.inputs,
+        &peaks,
+        &thresholds,
+        &options,
+        seed,
+        acceleration,
+        0.95,
+        &Silent,
+    )
+    .unwrap();
+    assert_eq!(certification.reference_storms, 120);
+    let reference = paired_peaks(metamodel, study, &study.inputs, samples, 99, acceleration, Order::Reduced, &Silent);
+    let reference: Vec<f64> = reference.unwrap().iter().map(|p| p.reference).collect();
+    for (i, &t) in thresholds.iter().enumerate() {
+        let p_ref = reference.iter().filter(|&&r| r > t).count() as f64 / samples as f64;
+        let certified_se = (curve.upper[i] - curve.lower[i]) / (2.0 * 1.96);
+        let reference_se = (p_ref * (1.0 - p_ref) / samples as f64).sqrt();
+        let gap = (curve.probabilities[i] - p_ref).abs();
+        assert!(
+            gap < 2.5 * certified_se.hypot(reference_se),
+            "threshold {t}: certified {} [{}, {}], reference {p_ref}",
+            curve.probabilities[i],
+            curve.lower[i],
+            curve.upper[i]
+        );
+        let correction = certification.correction[i];
+        assert!(certification.correction_lower[i] <= correction && correction <= certification.correction_upper[i]);
+    }
+}
+
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_certified_request_is_an_operation_with_its_correction() {
+    let app = spawn_app(&database("certify")).await;
+    let id = fixture::install(&app, fixture::STORM_S).await;
+    let path = format!("/v1/metamodels/{id}/exceedance");
+    // Small enough to be answered at once, but certified: queued all the same.
+    let body = json!({"samples": 200, "seed": 2, "response": "acceleration", "certify": {"reference_storms": 40}});
+    let (status, queued) = app.post_json(&path, body).await;
+    assert_eq!(status, 202, "{queued}");
+    let done = app.wait_for(queued["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(120)).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    let result = &done["result"];
+    let certification = &result["certification"];
+    assert_eq!(certification["reference_storms"], 40);
+    assert_eq!(certification["order"], "reduced");
+    let count = result["thresholds"].as_array().unwrap().len();
+    for key in [
+        "metamodel_probabilities",
+        "metamodel_lower",
+        "metamodel_upper",
+        "mismatch_rate",
+        "correction",
+        "correction_lower",
+        "correction_upper",
+    ] {
+        assert_eq!(certification[key].as_array().map(Vec::len), Some(count), "{key}");
+    }
+    let number = |v: &Value| v.as_f64().unwrap();
+    for i in 0..count {
+        let p = number(&result["probabilities"][i]);
+        let expected = number(&certification["metamodel_probabilities"][i]) + number(&certification["correction"][i]);
+        assert!((p - expected.clamp(0.0, 1.0)).abs() < 1e-12, "threshold {i}");
+        assert!(number(&result["lower"][i]) <= p && p <= number(&result["upper"][i]), "threshold {i}");
+    }
+    // Refused before anything is queued, naming the field.
+    for (wrong, field) in [
+        (json!({"samples": 100, "certify": {"reference_storms": 101}}), "certify.reference_storms"),
+        (json!({"samples": 100, "certify": {"reference_storms": 0}}), "certify.reference_storms"),
+        // Beyond the server's --max-reference-storms (1 000 by default).
+        (json!({"samples": 2000, "certify": {"reference_storms": 1500}}), "certify.reference_storms"),
+        (json!({"samples": 100, "certify": {"reference_storms": 10, "order": "sideways"}}), "certify"),
+        (json!({"samples": 100, "certify": {"reference_storms": -3}}), "certify"),
+    ] {
+        let (s, ct, body) = problem_details(app.post(&path, wrong.clone()).await).await;
+        assert_problem(s, &ct, &body, 422, field);
+    }
+    app.stop().await;
+}
