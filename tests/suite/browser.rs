@@ -413,6 +413,31 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     browser.execute("document.querySelector('#explore').scrollIntoView();", vec![]).await.unwrap();
     browser.screenshot().await.map(|png| std::fs::write(artefact("page.png"), png).unwrap()).unwrap();
 
+    // Certified with reference storms: more than the storms is refused by the server, naming the
+    // field; then the certified curve beside the metamodel's own, and their columns in the table.
+    click(&browser, "#explore-clear").await;
+    set_value(&browser, "#explore-certify", "301").await;
+    click(&browser, "#explore-form button[type=submit]").await;
+    wait_until(
+        &browser,
+        "document.querySelector('#explore-certify-error').textContent.includes('certify.reference_storms')",
+        short,
+    )
+    .await;
+    set_value(&browser, "#explore-certify", "16").await;
+    click(&browser, "#explore-form button[type=submit]").await;
+    let certified = "document.querySelectorAll('#explore-chart polyline[data-series]').length === 2 \
+                     && document.querySelector('#explore-chart svg').textContent.includes('metamodel alone')";
+    wait_until(&browser, certified, long).await;
+    let certified: Value = serde_json::from_str(&download(&browser, &driver, "#explore-json").await).unwrap();
+    assert_eq!(certified["certification"]["reference_storms"], 16, "{certified}");
+    let mismatch = browser
+        .execute("return document.querySelector('#explore-table tbody tr').cells[5].textContent;", vec![])
+        .await
+        .unwrap();
+    assert_ne!(mismatch, json!("—"), "the table shows the mismatch rate");
+    set_value(&browser, "#explore-certify", "").await;
+
     // The annual curve with return levels, fragility over speed, Sobol indices.
     // A site climate needs both speeds (the page says so), speeds that grow with the return
     // period (the server says so, next to the climate), then answers with the limit's β.

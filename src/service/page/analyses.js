@@ -146,6 +146,13 @@ export async function explore(event) {
   const fixed = heldInputs(form);
   if (!fixed) return;
   if (Object.keys(fixed).length) request.fixed = fixed;
+  const errors = [];
+  const referenceStorms = numberField($('#explore-certify'), errors, true);
+  if (errors.length) {
+    showProblem(form, 'explore', new ApiProblem(422, { title: 'Not sent', detail: '', errors }));
+    return;
+  }
+  if (referenceStorms !== undefined) request.certify = { reference_storms: referenceStorms, order: $('#explore-certify-order').value };
   const answer = await runAnalysis(form, 'explore', 'exceedance', request);
   if (!answer) return;
   const others = Object.entries(fixed).filter(([name]) => name !== 'wind_speed').map(([name, value]) => `${name} ${format(value)}`);
@@ -155,16 +162,20 @@ export async function explore(event) {
   drawExceedance();
 }
 
+/** A kept or latest curve's series: a certified one with the metamodel's own curve beside it. */
 function curveSeries(curve) {
   const { answer } = curve;
-  return { name: curve.name, x: answer.thresholds, y: answer.probabilities, lower: answer.lower, upper: answer.upper };
+  const c = answer.certification;
+  const own = { name: c ? `${curve.name}, certified with ${c.reference_storms} reference storms` : curve.name, x: answer.thresholds, y: answer.probabilities, lower: answer.lower, upper: answer.upper };
+  if (!c) return [own];
+  return [own, { name: `${curve.name}, metamodel alone`, x: answer.thresholds, y: c.metamodel_probabilities, lower: c.metamodel_lower, upper: c.metamodel_upper }];
 }
 
 export function drawExceedance() {
   const { latest, kept } = session.curves;
   if (!latest) return;
   const unit = UNITS[latest.answer.response.kind];
-  const series = [curveSeries(latest), ...(kept ? [curveSeries(kept)] : [])];
+  const series = [...curveSeries(latest), ...(kept ? curveSeries(kept) : [])];
   const chart = Charts.lines({
     title: `P(peak > x), ${latest.answer.samples} storms, ${format(100 * latest.answer.confidence)} % band`,
     xLabel: `${latest.answer.response.kind === 'rms_acceleration' ? 'RMS acceleration' : `peak ${latest.answer.response.kind.replace('_', ' ')}`} x (${unit})`, yLabel: 'probability of exceedance', yLog: true, yMax: 1,
@@ -175,12 +186,18 @@ export function drawExceedance() {
   const answer = latest.answer;
   $('#explore-table').hidden = false;
   $('#explore-table thead th').textContent = `Threshold (${unit})`;
+  const c = answer.certification;
   $('#explore-table tbody').replaceChildren(...answer.thresholds.map((threshold, i) => {
     const row = document.createElement('tr');
     for (const cell of [threshold, answer.probabilities[i], answer.lower[i], answer.upper[i]]) row.insertCell().textContent = format(cell);
+    for (const cell of c ? [c.metamodel_probabilities[i], c.mismatch_rate[i]] : ['—', '—']) row.insertCell().textContent = c ? format(cell) : cell;
     return row;
   }));
-  const csv = [`threshold_${UNIT_TAGS[answer.response.kind]},probability,lower,upper`, ...answer.thresholds.map((t, i) => `${t},${answer.probabilities[i]},${answer.lower[i]},${answer.upper[i]}`)].join('\n') + '\n';
+  // The server's CSV columns: a certified curve adds the metamodel's own probability and the correction.
+  const header = `threshold_${UNIT_TAGS[answer.response.kind]},probability,lower,upper${c ? ',metamodel_probability,mismatch_rate,correction,correction_lower,correction_upper' : ''}`;
+  const rows = answer.thresholds.map((t, i) => [t, answer.probabilities[i], answer.lower[i], answer.upper[i],
+    ...(c ? [c.metamodel_probabilities[i], c.mismatch_rate[i], c.correction[i], c.correction_lower[i], c.correction_upper[i]] : [])].join(','));
+  const csv = [header, ...rows].join('\n') + '\n';
   download($('#explore-csv'), 'exceedance.csv', 'text/csv', csv);
   download($('#explore-json'), 'exceedance.json', 'application/json', JSON.stringify(answer, null, 2));
   download($('#explore-svg'), 'exceedance.svg', 'image/svg+xml', Charts.serialize(chart));
