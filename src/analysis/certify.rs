@@ -15,7 +15,7 @@
 //! summed. The unit tests measure the coverage.
 
 use super::Response;
-use super::exceedance::{ExceedanceCurve, clopper_pearson};
+use super::exceedance::{ExceedanceCurve, clopper_pearson, exceedance_curve};
 use super::reference_storms::{paired_peaks, reference_storm_seed};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -49,9 +49,9 @@ fn reduced() -> Order {
     Order::Reduced
 }
 
-/// The certified exceedance curve of `response` at `thresholds`: `metamodel_peaks` are the
-/// metamodel's own storms (drawn with `seed`), the reference storms are drawn from `inputs` with a
-/// seed apart from them.
+/// The exceedance curve of `metamodel_peaks` (the metamodel's own storms, drawn with `seed`) at
+/// `thresholds`: plain, or certified when `certify` asks, its reference storms drawn from `inputs`
+/// with a seed apart from the metamodel's, and what they did.
 #[allow(clippy::too_many_arguments)]
 pub fn certify_exceedance(
     metamodel: &Metamodel,
@@ -59,17 +59,21 @@ pub fn certify_exceedance(
     inputs: &InputModel,
     metamodel_peaks: &[f64],
     thresholds: &[f64],
-    options: &CertifyOptions,
+    certify: Option<&CertifyOptions>,
     seed: u64,
     response: Response,
     confidence: f64,
     observer: &dyn Observer,
-) -> Result<(ExceedanceCurve, Certification)> {
+) -> Result<(ExceedanceCurve, Option<Certification>)> {
+    let Some(options) = certify else {
+        return Ok((exceedance_curve(metamodel_peaks, thresholds, confidence), None));
+    };
     check_reference_storms(options.reference_storms, metamodel_peaks.len(), "certify.reference_storms")?;
     let storms = options.reference_storms;
     let paired =
         paired_peaks(metamodel, study, inputs, storms, reference_storm_seed(seed), response, options.order, observer)?;
-    Ok(certified_curve(metamodel_peaks, &paired, thresholds, options.order, confidence))
+    let (curve, certification) = certified_curve(metamodel_peaks, &paired, thresholds, options.order, confidence);
+    Ok((curve, Some(certification)))
 }
 
 /// One storm run through both models: the reference's peak and the metamodel's (infinite when

@@ -5,7 +5,7 @@ use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
     STANDARD_GRAVITY, automatic_thresholds, certify_exceedance, check_confidence, check_reference_storms,
-    exceedance_csv, exceedance_curve, exceedance_svg, metamodel_peaks,
+    exceedance_csv, exceedance_svg, metamodel_peaks,
 };
 use crate::error::{Error, Result};
 use clap::Args;
@@ -53,25 +53,19 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     let counter = Counter(started);
     let peaks = metamodel_peaks(&metamodel, &study, &inputs, args.sampling.samples, args.seed, response, &counter)?;
     let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-    let (curve, certification) = match &certify {
-        None => (exceedance_curve(&peaks, &thresholds, args.confidence), None),
-        Some(options) => {
-            let (seed, confidence) = (args.seed, args.confidence);
-            let (curve, certification) = certify_exceedance(
-                &metamodel,
-                &study,
-                &inputs,
-                &peaks,
-                &thresholds,
-                options,
-                seed,
-                response,
-                confidence,
-                &counter,
-            )?;
-            (curve, Some(certification))
-        }
-    };
+    let (seed, confidence) = (args.seed, args.confidence);
+    let (curve, certification) = certify_exceedance(
+        &metamodel,
+        &study,
+        &inputs,
+        &peaks,
+        &thresholds,
+        certify.as_ref(),
+        seed,
+        response,
+        confidence,
+        &counter,
+    )?;
     let seconds = started.elapsed().as_secs_f64();
     let what = response.per_storm();
     if let (Some(path), Some(format)) = (&args.out, format) {

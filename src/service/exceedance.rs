@@ -10,7 +10,7 @@ use crate::analysis::exceedance_svg;
 use crate::analysis::{
     Certification, CertifyOptions, PeakProfile, Response, ResponseKind, ResponseName, automatic_thresholds,
     certify_exceedance, check_confidence, check_quantile, check_reference_storms, check_thresholds, exceedance_csv,
-    exceedance_curve, metamodel_peaks, metamodel_profiles,
+    metamodel_peaks, metamodel_profiles,
 };
 use crate::error::{Error, Result, require_finite};
 use crate::progress::Observer;
@@ -147,25 +147,19 @@ impl ExceedanceRequest {
             }
         };
         let thresholds = self.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-        let (curve, certification) = match &self.certify {
-            None => (exceedance_curve(&peaks, &thresholds, self.confidence), None),
-            Some(options) => {
-                let (seed, confidence) = (self.seed, self.confidence);
-                let (curve, certification) = certify_exceedance(
-                    metamodel,
-                    study,
-                    &inputs,
-                    &peaks,
-                    &thresholds,
-                    options,
-                    seed,
-                    response,
-                    confidence,
-                    observer,
-                )?;
-                (curve, Some(certification))
-            }
-        };
+        let (seed, confidence, certify) = (self.seed, self.confidence, self.certify.as_ref());
+        let (curve, certification) = certify_exceedance(
+            metamodel,
+            study,
+            &inputs,
+            &peaks,
+            &thresholds,
+            certify,
+            seed,
+            response,
+            confidence,
+            observer,
+        )?;
         let metamodel_id = metamodel_id.to_string();
         Ok(ExceedanceAnswer { curve, response, profile, certification, metamodel_id })
     }

@@ -62,13 +62,14 @@ fn the_certified_curve_agrees_with_reference_monte_carlo() {
         &study.inputs,
         &peaks,
         &thresholds,
-        &options,
+        Some(&options),
         seed,
         acceleration,
         0.95,
         &Silent,
     )
     .unwrap();
+    let certification = certification.expect("certified");
     assert_eq!(certification.reference_storms, 120);
     let reference = paired_peaks(metamodel, study, &study.inputs, samples, 99, acceleration, Order::Reduced, &Silent);
     let reference: Vec<f64> = reference.unwrap().iter().map(|p| p.reference).collect();
