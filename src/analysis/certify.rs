@@ -247,7 +247,8 @@ mod tests {
 
     /// The 95 % band holds the reference's probability in at least 93 % of 400 repetitions, from
     /// 0.5 down to 10⁻³ (10 000 surrogate storms, 200 paired), where the surrogate alone is off by
-    /// far more than its own band.
+    /// far more than its own band. Measured: 0.965, 0.9725, 1 and 1 at 0.5, 0.1, 10⁻², 10⁻³; a
+    /// plain normal interval from the same draws 0.96, 0.92, 0.52 and 0.665.
     #[test]
     fn the_band_covers_the_reference_probability_whatever_the_surrogates_bias() {
         let normal = Normal::standard();

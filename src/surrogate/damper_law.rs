@@ -32,7 +32,7 @@ pub struct DamperLaw {
 /// The knee as a fraction of a mode's root-mean-square first difference (in [`DamperLaw`]'s doc too).
 /// At 0.3 the law was nearly linear over most of a 20 m/s storm's first differences (peak
 /// acceleration error 5.9 % there, against 3.9 % at 0.1) and extrapolated worse to 60 m/s
-/// (displacement 1.1 % against 0.2 %); within the design both gave the same errors (docs/method.md).
+/// (displacement 1.1 % against 0.24 %); within the design both gave the same errors (docs/method.md).
 pub const KNEE_FRACTION: f64 = 0.1;
 
 impl DamperLaw {
@@ -61,7 +61,7 @@ impl DamperLaw {
 
 /// The law's secant S(Δ) = (Δ² + κ²)^((α−1)/2).
 #[inline(always)]
-pub fn secant(difference: f64, knee: f64, exponent: f64) -> f64 {
+fn secant(difference: f64, knee: f64, exponent: f64) -> f64 {
     secant_lanes([difference], knee, exponent)[0]
 }
 
