@@ -2,7 +2,7 @@
 //! inputs and the same wind through each, the peaks of one response from each.
 
 use super::certify::PairedPeak;
-use super::{Response, reference_peak};
+use super::{Draws, OnDivergence, Response, reference_peak};
 use crate::dynamics::ModalMotion;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, check};
@@ -19,9 +19,7 @@ pub fn reference_storm_seed(seed: u64) -> u64 {
 }
 
 /// `storms` draws of `inputs` (storm k's wind from stream k of `seed`) through the reference model
-/// of `order` and the metamodel, and the peak of `response` in each. A full-order storm is the
-/// floor field, and the metamodel sees its projection on the modes; a reduced-order storm is drawn
-/// as the metamodel's calibration drew its own. A metamodel run that diverges has an infinite peak.
+/// of `order` and the metamodel, and the peak of `response` in each.
 #[allow(clippy::too_many_arguments)]
 pub fn paired_peaks(
     metamodel: &Metamodel,
@@ -33,23 +31,41 @@ pub fn paired_peaks(
     order: Order,
     observer: &dyn Observer,
 ) -> Result<Vec<PairedPeak>> {
-    response.check(&study.structure)?;
     let rows = monte_carlo(inputs, storms, &mut rng_from_seed(seed));
+    let streams: Vec<usize> = (0..storms).collect();
+    let draws = Draws { study, rows: &rows, storms: &streams, seed, on_divergence: OnDivergence::Exceed };
+    paired_peaks_at(metamodel, &draws, response, order, observer)
+}
+
+/// The rows of `draws` (row i's wind from stream `draws.storms[i]` of `draws.seed`) through the
+/// reference model of `order` and the metamodel, and the peak of `response` in each. A full-order
+/// storm is the floor field, and the metamodel sees its projection on the modes; a reduced-order
+/// storm is drawn as the metamodel's calibration drew its own. A metamodel run that diverges has
+/// an infinite peak, whatever `draws.on_divergence` says.
+pub fn paired_peaks_at(
+    metamodel: &Metamodel,
+    draws: &Draws,
+    response: Response,
+    order: Order,
+    observer: &dyn Observer,
+) -> Result<Vec<PairedPeak>> {
+    let Draws { study, rows, storms, seed, .. } = *draws;
+    response.check(&study.structure)?;
     let path = match order {
         Order::Reduced => metamodel.calibration.options.wind,
         Order::Full => WindPath::Field,
     };
-    let done = AtomicUsize::new(0);
+    let (done, total) = (AtomicUsize::new(0), rows.len());
     rows.par_iter()
-        .enumerate()
-        .map(|(k, x)| {
+        .zip(storms)
+        .map(|(x, &k)| {
             check(observer)?;
             let run = study.reference_run(x, order, path, &mut rng_from_seed(stream_seed(seed, k as u64)))?;
             let pair = PairedPeak {
                 reference: reference_peak(study, x, &run, response)?,
                 metamodel: metamodel_peak(metamodel, study, x, &run, response)?,
             };
-            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: storms });
+            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
             Ok(pair)
         })
         .collect()

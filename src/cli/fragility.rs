@@ -1,6 +1,6 @@
 //! `windmeta fragility`: P(peak > x | v) over a grid of storm speeds, with lognormal fits.
 
-use super::args::{AnalysisArgs, ResponseArgs, answer, out_format};
+use super::args::{AnalysisArgs, CertifyArgs, ResponseArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{Fragility, FragilityOptions, MAX_WIND_SPEEDS, fragility_svg, metamodel_fragility};
@@ -26,6 +26,9 @@ pub struct FragilityArgs {
     pub samples: usize,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
+    /// With --certify N: N storms at each speed through both models.
+    #[command(flatten)]
+    pub certify: CertifyArgs,
     /// Write the answer: .json or .svg by extension.
     #[arg(long)]
     pub out: Option<PathBuf>,
@@ -61,6 +64,7 @@ pub fn fragility(args: &FragilityArgs) -> Result<String> {
         samples_per_speed: args.samples,
         seed: args.analysis.seed,
         confidence: args.analysis.confidence,
+        certify: args.certify.options(),
     };
     let response = args.response.response(&study)?;
     let started = Instant::now();
@@ -86,6 +90,12 @@ fn table(result: &Fragility, what: &str, unit: &str, seconds: f64) -> String {
         "β",
         "interval"
     );
+    if let Some(c) = result.curves.first().and_then(|c| c.certification.as_ref()) {
+        out += &format!(
+            "certified with {} storms at each speed through the reference model as well\n",
+            c.reference_storms
+        );
+    }
     for c in &result.curves {
         match &c.lognormal {
             Some(f) => {

@@ -6,9 +6,9 @@ use super::ServeArgs;
 use super::rendering::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
-    ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions, Response,
-    ResponseKind, ResponseName, Sampling, Sensitivity, WIND_SPEED, check_confidence, fragility_svg, hazard_svg,
-    metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
+    CertifyOptions, ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions,
+    Response, ResponseKind, ResponseName, Sampling, Sensitivity, WIND_SPEED, check_confidence, fragility_svg,
+    hazard_svg, metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
 };
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -105,6 +105,10 @@ pub struct FragilityRequest {
     pub response: ResponseKind,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
     pub confidence: f64,
+    /// Certify every speed's probabilities with this many storms per speed run through both the
+    /// reference model and the metamodel (at most the storms per speed; all speeds' together
+    /// within the server's bound). A certified request always runs as an operation.
+    pub certify: Option<CertifyOptions>,
 }
 
 impl HazardRequest {
@@ -138,6 +142,7 @@ impl Default for FragilityRequest {
             group: None,
             response: ResponseKind::Displacement,
             confidence: 0.95,
+            certify: None,
         }
     }
 }
@@ -152,6 +157,7 @@ impl FragilityRequest {
             samples_per_speed: self.samples,
             seed: self.seed,
             confidence: self.confidence,
+            certify: self.certify,
         })
     }
 }
@@ -261,6 +267,16 @@ impl AnalysisRequest {
         }
     }
 
+    /// The storms it runs through the reference model as well (a certified answer's); none: 0.
+    pub fn reference_storms(&self) -> usize {
+        match self {
+            AnalysisRequest::Fragility(r) => {
+                r.certify.map_or(0, |c| c.reference_storms.saturating_mul(r.wind_speeds.len()))
+            }
+            AnalysisRequest::Hazard(_) | AnalysisRequest::Sensitivity(_) => 0,
+        }
+    }
+
     /// The response the request names, checked against the study's structure.
     fn response(&self, study: &Study) -> Result<Response> {
         let (floor, group, kind) = match self {
@@ -281,6 +297,16 @@ impl AnalysisRequest {
             ));
         }
         self.response(study)?;
+        let reference_storms = self.reference_storms();
+        if reference_storms > config.max_reference_storms {
+            return Err(Error::invalid(
+                "certify.reference_storms",
+                format!(
+                    "the request runs {reference_storms} reference storms; this server allows at most {}",
+                    config.max_reference_storms
+                ),
+            ));
+        }
         match self {
             AnalysisRequest::Hazard(r) => r.options(study)?.check(),
             AnalysisRequest::Fragility(r) => r.options()?.check(),

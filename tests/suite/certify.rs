@@ -1,7 +1,7 @@
 //! Certified curves on the shared fixture: the reference storms pair with the storms the metamodel
 //! itself would draw, the certified curve agrees with plain reference Monte Carlo within its band,
-//! and over HTTP a certified request is an operation whose answer carries the correction, its
-//! bad input refused naming the field.
+//! and over HTTP a certified exceedance or fragility request is an operation whose answer carries
+//! the correction, its bad input refused naming the field.
 
 use crate::harness::app::{assert_problem, database, problem_details, spawn_app};
 use crate::harness::fixture;
@@ -136,5 +136,22 @@ async fn a_certified_request_is_an_operation_with_its_correction() {
         let (s, ct, body) = problem_details(app.post(&path, wrong.clone()).await).await;
         assert_problem(s, &ct, &body, 422, field);
     }
+    // Fragility, certified at each speed with the same reference draws: an operation whose
+    // curves carry the correction per speed; more reference storms over every speed than the
+    // server allows are refused.
+    let fragility = format!("/v1/metamodels/{id}/fragility");
+    let body = json!({"wind_speeds": [30, 36], "thresholds": [0.4], "samples": 60, "seed": 3,
+                      "certify": {"reference_storms": 12}});
+    let (status, queued) = app.post_json(&fragility, body).await;
+    assert_eq!(status, 202, "{queued}");
+    let done = app.wait_for(queued["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(120)).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    let curve = &done["result"]["curves"][0];
+    assert_eq!(curve["certification"]["reference_storms"], 12);
+    assert_eq!(curve["certification"]["mismatch_rate"].as_array().map(Vec::len), Some(2), "{curve}");
+    let too_many = json!({"wind_speeds": [30, 36], "thresholds": [0.4], "samples": 600,
+                          "certify": {"reference_storms": 600}});
+    let (s, ct, body) = problem_details(app.post(&fragility, too_many).await).await;
+    assert_problem(s, &ct, &body, 422, "certify.reference_storms");
     app.stop().await;
 }

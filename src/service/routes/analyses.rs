@@ -30,7 +30,8 @@ async fn analyse(
 ) -> Result<HttpResponse, ApiError> {
     let loaded = load(&state, &id).await?;
     request.check(&state.config, &loaded.1)?;
-    let storms = request.storms(&loaded.1);
+    // Reference storms take minutes: a certified answer is always an operation.
+    let storms = (request.reference_storms() == 0).then(|| request.storms(&loaded.1));
     let queued = {
         let (id, request) = (id.clone(), request.clone());
         move || Queued {
@@ -46,7 +47,7 @@ async fn analyse(
     let work: Work = Box::new(move |metamodel, study, observer, rendering| {
         Ok(request.answer(metamodel, study, &id, observer)?.render(rendering))
     });
-    answer_or_queue(&state, &headers, loaded, Some(storms), queued, work).await
+    answer_or_queue(&state, &headers, loaded, storms, queued, work).await
 }
 
 /// The annual exceedance curve of a peak response under a wind climate, with its band, return
