@@ -84,7 +84,8 @@ pub struct PairedPeak {
     pub metamodel: f64,
 }
 
-/// What the reference storms did to a curve, threshold by threshold.
+/// What the reference storms did to a curve, point by point: threshold by threshold on an
+/// exceedance curve, speed by speed on a fragility curve.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct Certification {
