@@ -340,26 +340,34 @@ mod tests {
     use super::*;
     use crate::uncertainty::{Input, Marginal};
 
-    /// peak = v·exp(σ z), z ~ N(0, 1), exceeds x with probability Φ(ln(v/x)/σ): a lognormal
-    /// fragility with θ = x and β = σ exactly. The fit's intervals hold both, and each point's band
-    /// holds the exact probability.
-    #[test]
-    fn lognormal_fragility_of_a_lognormal_response_is_recovered() {
+    /// Inputs z and e, standard normal, and the wind speed; 21 speeds from 20 to 60 m/s, two
+    /// thresholds, 2 000 storms per speed, 99 % bands.
+    fn toy(certify: Option<CertifyOptions>) -> (InputModel, FragilityOptions) {
         let inputs = InputModel::new(vec![
             Input { name: "z".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },
+            Input { name: "e".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },
             Input { name: WIND_SPEED.into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } },
         ])
         .unwrap();
-        let sigma = 0.2;
         let options = FragilityOptions {
             wind_speeds: (0..=20).map(|i| 20.0 + 2.0 * i as f64).collect(),
             thresholds: vec![30.0, 45.0],
             samples_per_speed: 2000,
             seed: 4,
             confidence: 0.99,
-            certify: None,
+            certify,
         };
-        let peaks_of = |rows: &[Vec<f64>], _: &[usize]| Ok(rows.iter().map(|r| r[1] * (sigma * r[0]).exp()).collect());
+        (inputs, options)
+    }
+
+    /// peak = v·exp(σ z), z ~ N(0, 1), exceeds x with probability Φ(ln(v/x)/σ): a lognormal
+    /// fragility with θ = x and β = σ exactly. The fit's intervals hold both, and each point's band
+    /// holds the exact probability.
+    #[test]
+    fn lognormal_fragility_of_a_lognormal_response_is_recovered() {
+        let (inputs, options) = toy(None);
+        let sigma = 0.2;
+        let peaks_of = |rows: &[Vec<f64>], _: &[usize]| Ok(rows.iter().map(|r| r[2] * (sigma * r[0]).exp()).collect());
         let result =
             fragility(&inputs, &options, [20.0, 50.0], peaks_of, |_, _| unreachable!("not certified")).unwrap();
         let normal = Normal::standard();
@@ -377,27 +385,14 @@ mod tests {
     }
 
     /// The same response through a surrogate 5 % low with 3 % scatter of its own: its curves miss
-    /// the exact probabilities; certified with 300 reference storms per speed, at least 95 % of
+    /// the exact probabilities; certified with 200 reference storms per speed, at least 95 % of
     /// the 42 points' 99 % bands hold them, and the fit's median speed interval holds θ.
     #[test]
     fn certified_fragility_holds_the_reference_whatever_the_surrogates_bias() {
-        let inputs = InputModel::new(vec![
-            Input { name: "z".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },
-            Input { name: "e".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },
-            Input { name: WIND_SPEED.into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } },
-        ])
-        .unwrap();
+        let (inputs, options) = toy(Some(CertifyOptions { reference_storms: 200, order: Order::Reduced }));
         let sigma = 0.2;
         let reference = |r: &Vec<f64>| r[2] * (sigma * r[0]).exp();
         let surrogate = |r: &Vec<f64>| 0.95 * reference(r) * (0.03 * r[1]).exp();
-        let options = FragilityOptions {
-            wind_speeds: (0..=20).map(|i| 20.0 + 2.0 * i as f64).collect(),
-            thresholds: vec![30.0, 45.0],
-            samples_per_speed: 2000,
-            seed: 4,
-            confidence: 0.99,
-            certify: Some(CertifyOptions { reference_storms: 200, order: Order::Reduced }),
-        };
         let peaks_of = |rows: &[Vec<f64>], _: &[usize]| Ok(rows.iter().map(surrogate).collect());
         let paired_of = |rows: &[Vec<f64>], _: &[usize]| {
             Ok(rows.iter().map(|r| PairedPeak { reference: reference(r), metamodel: surrogate(r) }).collect())
