@@ -3,6 +3,7 @@
 //! requests as operations.
 
 use super::ServeArgs;
+use super::exceedance::check_reference_storm_budget;
 use super::rendering::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
@@ -297,16 +298,7 @@ impl AnalysisRequest {
             ));
         }
         self.response(study)?;
-        let reference_storms = self.reference_storms();
-        if reference_storms > config.max_reference_storms {
-            return Err(Error::invalid(
-                "certify.reference_storms",
-                format!(
-                    "the request runs {reference_storms} reference storms; this server allows at most {}",
-                    config.max_reference_storms
-                ),
-            ));
-        }
+        check_reference_storm_budget(self.reference_storms(), config)?;
         match self {
             AnalysisRequest::Hazard(r) => r.options(study)?.check(),
             AnalysisRequest::Fragility(r) => r.options()?.check(),

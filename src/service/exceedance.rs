@@ -167,13 +167,21 @@ impl ExceedanceRequest {
 
 /// Errs, naming the field, unless a certification's reference storms are within the contract's
 /// and the server's bounds and no more than the request's metamodel storms.
-pub fn check_certify(certify: &CertifyOptions, samples: usize, config: &ServeArgs) -> Result<()> {
-    let storms = certify.reference_storms;
-    check_reference_storms(storms, samples, "certify.reference_storms")?;
+fn check_certify(certify: &CertifyOptions, samples: usize, config: &ServeArgs) -> Result<()> {
+    check_reference_storms(certify.reference_storms, samples, "certify.reference_storms")?;
+    check_reference_storm_budget(certify.reference_storms, config)
+}
+
+/// Errs, naming the field, when a request runs more reference storms in all than the server's
+/// `--max-reference-storms`.
+pub fn check_reference_storm_budget(storms: usize, config: &ServeArgs) -> Result<()> {
     if storms > config.max_reference_storms {
         return Err(Error::invalid(
             "certify.reference_storms",
-            format!("{storms} reference storms; this server allows at most {}", config.max_reference_storms),
+            format!(
+                "the request runs {storms} reference storms; this server allows at most {}",
+                config.max_reference_storms
+            ),
         ));
     }
     Ok(())
