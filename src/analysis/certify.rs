@@ -16,7 +16,8 @@
 
 use super::Response;
 use super::exceedance::{ExceedanceCurve, clopper_pearson, exceedance_curve};
-use super::reference_storms::{paired_peaks, reference_storm_seed};
+use super::plot::exceedance_svg;
+use super::reference_storms::{PairedPeak, paired_peaks, reference_storm_seed};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
@@ -74,14 +75,6 @@ pub fn certify_exceedance(
         paired_peaks(metamodel, study, inputs, storms, reference_storm_seed(seed), response, options.order, observer)?;
     let (curve, certification) = certified_curve(metamodel_peaks, &paired, thresholds, options.order, confidence);
     Ok((curve, Some(certification)))
-}
-
-/// One storm run through both models: the reference's peak and the metamodel's (infinite when
-/// its free run diverged: it exceeds every threshold).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct PairedPeak {
-    pub reference: f64,
-    pub metamodel: f64,
 }
 
 /// What the reference storms did to a curve, point by point: threshold by threshold on an
@@ -183,16 +176,17 @@ pub fn certified_curve(
     (curve, certification)
 }
 
-impl Certification {
-    /// The metamodel's own curve, as an uncertified answer would have drawn it.
-    pub fn metamodel_curve(&self, certified: &ExceedanceCurve) -> ExceedanceCurve {
-        ExceedanceCurve {
-            probabilities: self.metamodel_probabilities.clone(),
-            lower: self.metamodel_lower.clone(),
-            upper: self.metamodel_upper.clone(),
-            ..certified.clone()
-        }
-    }
+/// The figure of an exceedance curve labelled `label`; a certified one beside the metamodel's own
+/// curve with its band, as an uncertified answer would have drawn it.
+pub fn exceedance_figure(curve: &ExceedanceCurve, certification: Option<&Certification>, label: &str) -> String {
+    let Some(c) = certification else { return exceedance_svg(&[("PC-NARX", curve)], label) };
+    let metamodel = ExceedanceCurve {
+        probabilities: c.metamodel_probabilities.clone(),
+        lower: c.metamodel_lower.clone(),
+        upper: c.metamodel_upper.clone(),
+        ..curve.clone()
+    };
+    exceedance_svg(&[("PC-NARX", &metamodel), ("certified", curve)], label)
 }
 
 /// A proportion's adjusted centre and the variance of its estimate.

@@ -2,12 +2,10 @@
 //! storm's phases random, and per threshold the lognormal fragility P = Φ(ln(v/θ)/β) that
 //! engineers tabulate, fitted by maximum likelihood on the binomial counts (Baker 2015).
 
-use super::certify::{
-    Certification, CertifyOptions, MAX_REFERENCE_STORMS, PairedPeak, certified_curve, check_reference_storms,
-};
+use super::certify::{Certification, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, check_reference_storms};
 use super::exceedance::{ExceedanceCurve, check_confidence, clopper_pearson};
 use super::hazard::WIND_SPEED;
-use super::reference_storms::{paired_peaks_at, reference_storm_seed};
+use super::reference_storms::{PairedPeak, paired_peaks_at, reference_storm_seed};
 use super::sampling::{DivergedStorm, check_samples, name_diverged};
 use super::{Draws, OnDivergence, Response, check_thresholds, peaks_at};
 use crate::error::{Error, Result};
@@ -157,13 +155,22 @@ pub fn fragility(
     let n = options.samples_per_speed;
     let (rows, storms) = rows_at_every_speed(inputs, wind, &options.wind_speeds, n, options.seed);
     let peaks = peaks_of(&rows, &storms)?;
-    let paired = match &options.certify {
+    let confidence = options.confidence;
+    // Certified, every speed's curve at every threshold, its metamodel storms corrected by its
+    // reference storms.
+    let certified = match &options.certify {
         None => None,
         Some(certify) => {
             let seed = reference_storm_seed(options.seed);
             let (rows, storms) =
                 rows_at_every_speed(inputs, wind, &options.wind_speeds, certify.reference_storms, seed);
-            Some((certify, paired_of(&rows, &storms)?))
+            let paired = paired_of(&rows, &storms)?;
+            let per_speed: Vec<(ExceedanceCurve, Certification)> = peaks
+                .chunks(n)
+                .zip(paired.chunks(certify.reference_storms))
+                .map(|(peaks, paired)| certified_curve(peaks, paired, &options.thresholds, certify.order, confidence))
+                .collect();
+            Some((certify, per_speed))
         }
     };
     let diverged: Vec<usize> = peaks.chunks(n).map(|p| p.iter().filter(|y| y.is_infinite()).count()).collect();
@@ -173,11 +180,11 @@ pub fn fragility(
     // extrapolates, and counting them as exceeding would bend the fitted curve.
     let sound: Vec<usize> = (0..diverged.len()).filter(|&j| diverged[j] == 0).collect();
     let sound_speeds: Vec<f64> = sound.iter().map(|&j| options.wind_speeds[j]).collect();
-    let confidence = options.confidence;
     let curves = options
         .thresholds
         .iter()
-        .map(|&x| match &paired {
+        .enumerate()
+        .map(|(i, &x)| match &certified {
             None => {
                 let counts: Vec<f64> = peaks.chunks(n).map(|p| p.iter().filter(|&&y| y > x).count() as f64).collect();
                 let bands: Vec<(f64, f64)> = counts.iter().map(|&k| clopper_pearson(k, n as f64, confidence)).collect();
@@ -191,8 +198,8 @@ pub fn fragility(
                     certification: None,
                 }
             }
-            Some((certify, paired)) => {
-                certified_fragility(x, &peaks, n, paired, certify, &sound, &sound_speeds, confidence)
+            Some((certify, per_speed)) => {
+                certified_fragility(i, x, per_speed, certify, n, &sound, &sound_speeds, confidence)
             }
         })
         .collect();
@@ -207,28 +214,24 @@ pub fn fragility(
     })
 }
 
-/// One threshold's certified curve: at each speed the metamodel's storms there corrected by the
-/// reference storms there ([`certified_curve`]), and the lognormal fitted to the certified
-/// probabilities with their effective numbers of storms.
+/// Threshold `i`'s certified curve, read off every speed's certified curve ([`certified_curve`]),
+/// and the lognormal fitted to its probabilities with their effective numbers of storms.
 #[allow(clippy::too_many_arguments)]
 fn certified_fragility(
+    i: usize,
     threshold: f64,
-    peaks: &[f64],
-    n: usize,
-    paired: &[PairedPeak],
+    per_speed: &[(ExceedanceCurve, Certification)],
     certify: &CertifyOptions,
+    n: usize,
     sound: &[usize],
     sound_speeds: &[f64],
     confidence: f64,
 ) -> FragilityCurve {
-    let per_speed: Vec<(ExceedanceCurve, Certification)> = peaks
-        .chunks(n)
-        .zip(paired.chunks(certify.reference_storms))
-        .map(|(peaks, paired)| certified_curve(peaks, paired, &[threshold], certify.order, confidence))
-        .collect();
-    let column = |f: &dyn Fn(&(ExceedanceCurve, Certification)) -> f64| per_speed.iter().map(f).collect::<Vec<f64>>();
-    let probability = column(&|(c, _)| c.probabilities[0]);
-    let (lower, upper) = (column(&|(c, _)| c.lower[0]), column(&|(c, _)| c.upper[0]));
+    let column = |f: &dyn Fn(&(ExceedanceCurve, Certification)) -> &[f64]| -> Vec<f64> {
+        per_speed.iter().map(|speed| f(speed)[i]).collect()
+    };
+    let probability = column(&|(c, _)| &c.probabilities);
+    let (lower, upper) = (column(&|(c, _)| &c.lower), column(&|(c, _)| &c.upper));
     let z = Normal::standard().inverse_cdf(0.5 + confidence / 2.0);
     // Effective storms: p(1 − p)/Var p, the variance read off the band; n where p is 0 or 1.
     let trials: Vec<f64> = sound
@@ -242,13 +245,13 @@ fn certified_fragility(
     let certification = Certification {
         reference_storms: certify.reference_storms,
         order: certify.order,
-        metamodel_probabilities: column(&|(_, c)| c.metamodel_probabilities[0]),
-        metamodel_lower: column(&|(_, c)| c.metamodel_lower[0]),
-        metamodel_upper: column(&|(_, c)| c.metamodel_upper[0]),
-        mismatch_rate: column(&|(_, c)| c.mismatch_rate[0]),
-        correction: column(&|(_, c)| c.correction[0]),
-        correction_lower: column(&|(_, c)| c.correction_lower[0]),
-        correction_upper: column(&|(_, c)| c.correction_upper[0]),
+        metamodel_probabilities: column(&|(_, c)| &c.metamodel_probabilities),
+        metamodel_lower: column(&|(_, c)| &c.metamodel_lower),
+        metamodel_upper: column(&|(_, c)| &c.metamodel_upper),
+        mismatch_rate: column(&|(_, c)| &c.mismatch_rate),
+        correction: column(&|(_, c)| &c.correction),
+        correction_lower: column(&|(_, c)| &c.correction_lower),
+        correction_upper: column(&|(_, c)| &c.correction_upper),
     };
     FragilityCurve {
         threshold,

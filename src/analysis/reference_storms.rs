@@ -1,7 +1,6 @@
 //! Storms run through both the reference model and the metamodel, for certified answers: the same
 //! inputs and the same wind through each, the peaks of one response from each.
 
-use super::certify::PairedPeak;
 use super::{Draws, OnDivergence, Response, reference_peak};
 use crate::dynamics::ModalMotion;
 use crate::error::{Error, Result};
@@ -11,6 +10,14 @@ use crate::surrogate::Metamodel;
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed, stream_seed};
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+/// One storm run through both models: the reference's peak and the metamodel's (infinite when
+/// its free run diverged: it exceeds every threshold).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PairedPeak {
+    pub reference: f64,
+    pub metamodel: f64,
+}
 
 /// The seed of a request's reference storms: a stream apart from its metamodel storms (which are
 /// drawn with the request's own seed), so that the two sets are independent.

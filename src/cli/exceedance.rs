@@ -5,7 +5,7 @@ use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
     STANDARD_GRAVITY, automatic_thresholds, certify_exceedance, check_confidence, check_reference_storms,
-    exceedance_csv, exceedance_svg, metamodel_peaks,
+    exceedance_csv, exceedance_figure, metamodel_peaks,
 };
 use crate::error::{Error, Result};
 use clap::Args;
@@ -75,15 +75,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
                 &json!({"response": response, "curve": curve, "certification": certification, "seconds": seconds}),
             )
             .expect("plain JSON"),
-            _ => {
-                let label = format!("{what} x ({})", response.unit());
-                match &certification {
-                    None => exceedance_svg(&[("PC-NARX", &curve)], &label),
-                    Some(c) => {
-                        exceedance_svg(&[("PC-NARX", &c.metamodel_curve(&curve)), ("certified", &curve)], &label)
-                    }
-                }
-            }
+            _ => exceedance_figure(&curve, certification.as_ref(), &format!("{what} x ({})", response.unit())),
         };
         write_out(path, &text)?;
     }

@@ -6,7 +6,7 @@ use super::ServeArgs;
 use super::rendering::Rendering;
 use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
-use crate::analysis::exceedance_svg;
+use crate::analysis::exceedance_figure;
 use crate::analysis::{
     Certification, CertifyOptions, PeakProfile, Response, ResponseKind, ResponseName, automatic_thresholds,
     certify_exceedance, check_confidence, check_quantile, check_reference_storms, check_thresholds, exceedance_csv,
@@ -226,11 +226,7 @@ impl ExceedanceAnswer {
             Rendering::Csv => ("text/csv", exceedance_csv(curve, self.certification.as_ref(), &self.response)),
             Rendering::Svg => {
                 let label = format!("{} x ({})", self.response.per_storm(), self.response.unit());
-                let svg = match &self.certification {
-                    None => exceedance_svg(&[("PC-NARX", curve)], &label),
-                    Some(c) => exceedance_svg(&[("PC-NARX", &c.metamodel_curve(curve)), ("certified", curve)], &label),
-                };
-                ("image/svg+xml", svg)
+                ("image/svg+xml", exceedance_figure(curve, self.certification.as_ref(), &label))
             }
         }
     }
