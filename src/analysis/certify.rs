@@ -205,15 +205,15 @@ impl AdjustedProportion {
 }
 
 /// A difference of paired proportions, adjusted.
-struct AdjustedDifference {
-    centre: f64,
-    variance: f64,
+pub(super) struct AdjustedDifference {
+    pub centre: f64,
+    pub variance: f64,
 }
 
 impl AdjustedDifference {
     /// Bonett & Price: one pseudo-count added to each discordant cell and two to the pairs, so
     /// that no mismatch among few pairs still leaves the band its width.
-    fn bonett_price(only_first: f64, only_second: f64, pairs: f64) -> Self {
+    pub(super) fn bonett_price(only_first: f64, only_second: f64, pairs: f64) -> Self {
         let (first, second) = ((only_first + 1.0) / (pairs + 2.0), (only_second + 1.0) / (pairs + 2.0));
         let centre = first - second;
         AdjustedDifference { centre, variance: (first + second - centre * centre) / (pairs + 2.0) }

@@ -2,16 +2,19 @@
 //! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
 //! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
 
+use super::certified_hazard::{CertifiedPoint, HazardCertification, PairedStrata};
+use super::certify::{CertifyOptions, check_reference_storms};
 use super::climate::{annual_probability_of_period, period_of_annual_probability};
 use super::exceedance::{automatic_thresholds, check_confidence};
+use super::reference_storms::{PairedPeak, paired_peaks_at, reference_storm_seed};
 use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, name_diverged, peaks_at};
 use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
 use super::{Response, check_thresholds};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
-use crate::study::Study;
+use crate::study::{Order, Study};
 use crate::surrogate::Metamodel;
-use crate::uncertainty::{InputModel, Marginal, monte_carlo, rng_from_seed};
+use crate::uncertainty::{InputModel, Marginal, Rng, monte_carlo, rng_from_seed};
 use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
@@ -30,6 +33,13 @@ const ALWAYS_TARGETED_PERIOD: f64 = 10.0;
 /// the 10⁻⁵ that at most 10⁵ storms resolve with a coefficient of variation below 0.3.
 pub const MAX_RETURN_PERIOD: f64 = 1e6;
 
+/// One in this many of an analysis's storms go to its pilot, equally over the strata.
+const PILOT_SHARE: usize = 4;
+
+/// One in this many of a certified analysis's reference storms go to their pilot: more than the
+/// metamodel's, for the pilot also measures how far the two models disagree.
+const REFERENCE_PILOT_SHARE: usize = 2;
+
 /// The largest station speed the wind model admits (m/s).
 const MAX_SPEED: f64 = 150.0;
 
@@ -47,6 +57,9 @@ pub struct HazardOptions {
     pub limit: Option<f64>,
     pub confidence: f64,
     pub sampling: Sampling,
+    /// Certify the curve with this many storms through both the reference model and the
+    /// metamodel, spread over the wind strata ([`super::certified_hazard`]).
+    pub certify: Option<CertifyOptions>,
 }
 
 impl HazardOptions {
@@ -68,7 +81,19 @@ impl HazardOptions {
             check_thresholds(&[limit])
                 .map_err(|_| Error::invalid("limit", "must lie between 0 and 1e9, in the response's unit"))?;
         }
+        if let Some(certify) = &self.certify {
+            check_reference_storms(certify.reference_storms, self.samples, "certify.reference_storms")?;
+            pilot(&self.strata(), certify.reference_storms, REFERENCE_PILOT_SHARE, "certify.reference_storms")?;
+        }
         Ok(())
+    }
+
+    /// The wind strata the analysis samples.
+    fn strata(&self) -> WindStrata {
+        match self.sampling {
+            Sampling::Stratified => WindStrata::new(&self.climate, self.smallest_probability(), MAX_SPEED),
+            Sampling::MonteCarlo => WindStrata::monte_carlo(),
+        }
     }
 
     /// The smallest annual probability the answer must resolve, to the decade the strata need: 1/T
@@ -147,18 +172,27 @@ pub struct HazardCurve {
     pub strata: usize,
     pub sampling: Sampling,
     pub confidence: f64,
+    /// What the reference storms did, when the curve was certified (then `annual_probability`,
+    /// `lower`, `upper`, the return levels and the reliability are the certified ones).
+    pub certification: Option<HazardCertification>,
 }
 
 impl HazardCurve {
     /// The curve as CSV, one row per threshold (empty where a value is undefined); the threshold
-    /// column named with the response's unit (`threshold_m`, `threshold_m_s2`, `threshold_n`).
+    /// column named with the response's unit (`threshold_m`, `threshold_m_s2`, `threshold_n`). A
+    /// certified curve adds what its reference storms did.
     pub fn csv(&self, unit_tag: &str) -> String {
         let mut out =
-            format!("threshold_{unit_tag},annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range\n");
+            format!("threshold_{unit_tag},annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range");
+        if self.certification.is_some() {
+            out +=
+                ",metamodel_probability,mismatch_rate,correction,correction_lower,correction_upper,uncorrected_bound";
+        }
+        out += "\n";
         let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
         for i in 0..self.thresholds.len() {
             out += &format!(
-                "{},{},{},{},{},{},{}\n",
+                "{},{},{},{},{},{},{}",
                 self.thresholds[i],
                 self.annual_probability[i],
                 self.lower[i],
@@ -167,6 +201,15 @@ impl HazardCurve {
                 blank(self.mri_years[i]),
                 self.probability_beyond_calibrated_range[i]
             );
+            if let Some(c) = &self.certification {
+                let p = &c.points;
+                let row = [p.metamodel_probabilities[i], p.mismatch_rate[i], p.correction[i], p.correction_lower[i]];
+                out += &format!(
+                    ",{},{},{},{},{},{}",
+                    row[0], row[1], row[2], row[3], p.correction_upper[i], c.uncorrected_bound[i]
+                );
+            }
+            out += "\n";
         }
         out
     }
@@ -175,65 +218,57 @@ impl HazardCurve {
 /// The annual curve of the peaks that `peaks_of(rows, first)` returns for input rows drawn from
 /// `inputs` with the wind speed replaced by the climate's (`first`: the number of rows run before,
 /// so that every row gets its own storm). Stratified, a quarter of the storms go equally to the
-/// strata and the rest by Neyman's allocation for the return periods asked for.
+/// strata and the rest by Neyman's allocation for the return periods asked for. Certified, the
+/// storms through both models that `pairs_of(rows, first)` returns, for rows drawn alike from the
+/// reference storms' seed, correct it stratum by stratum ([`super::certified_hazard`]).
 pub fn hazard_curve(
     inputs: &InputModel,
     options: &HazardOptions,
     calibrated: [f64; 2],
     mut peaks_of: impl FnMut(&[Vec<f64>], usize) -> Result<Vec<f64>>,
+    pairs_of: impl FnMut(&[Vec<f64>], usize) -> Result<Vec<PairedPeak>>,
 ) -> Result<HazardCurve> {
     options.check()?;
-    let wind = inputs.index_of(WIND_SPEED)?;
-    let strata = match options.sampling {
-        Sampling::Stratified => WindStrata::new(&options.climate, options.smallest_probability(), MAX_SPEED),
-        Sampling::MonteCarlo => WindStrata::monte_carlo(),
-    };
+    let strata = options.strata();
+    let draws = StormRows { inputs, wind: inputs.index_of(WIND_SPEED)?, climate: &options.climate, strata: &strata };
     let mut rng = rng_from_seed(options.seed);
     let (mut run, mut diverged, mut first_diverged) = (0, 0, Vec::new());
     let mut stage = |counts: &[usize]| -> Result<(Vec<f64>, Vec<bool>)> {
-        let speeds = strata.speeds(&options.climate, counts, &mut rng);
-        if let Some(&v) = speeds.iter().find(|v| WindLoads::check_speed(**v).is_err()) {
-            return Err(Error::invalid("climate", format!("puts weight on a speed the wind model refuses ({v} m/s)")));
-        }
-        let mut rows = monte_carlo(inputs, speeds.len(), &mut rng);
-        for (row, &v) in rows.iter_mut().zip(&speeds) {
-            row[wind] = v;
-        }
+        let (rows, speeds) = draws.rows(counts, &mut rng)?;
         let peaks = peaks_of(&rows, run)?;
         diverged += peaks.iter().filter(|p| p.is_infinite()).count();
         name_diverged(inputs, &rows, run.., &peaks, &mut first_diverged);
         run += rows.len();
         Ok((peaks, speeds.iter().map(|v| !(calibrated[0]..=calibrated[1]).contains(v)).collect()))
     };
-    let pilot_share = if strata.count() == 1 { 1 } else { 4 };
-    let pilot_counts = vec![options.samples / pilot_share / strata.count(); strata.count()];
-    if pilot_counts[0] < 2 {
-        return Err(Error::invalid(
-            "samples",
-            format!("must be at least {} for the {} strata", 2 * pilot_share * strata.count(), strata.count()),
-        ));
-    }
+    let pilot_counts = pilot(&strata, options.samples, PILOT_SHARE, "samples")?;
     let (peaks, outside) = stage(&pilot_counts)?;
     let mut sample = StratifiedPeaks::new(&strata, &pilot_counts, &peaks, &outside);
     let budget = options.samples - pilot_counts.iter().sum::<usize>();
     if strata.count() > 1 && budget > 0 {
-        let all = sample.finite_peaks();
-        let targets: Vec<f64> = options
-            .return_periods
-            .iter()
-            .chain(std::iter::once(&ALWAYS_TARGETED_PERIOD))
-            .filter_map(|&t| return_level(&sample, &all, t, options.confidence).value)
-            .collect();
-        let counts = strata.neyman(&sample, &targets, budget);
+        let counts =
+            strata.neyman(&sample, &targets(&sample, options, |x| sample.exceedance(x, options.confidence)), budget);
         let (peaks, outside) = stage(&counts)?;
         sample.add(&counts, &peaks, &outside);
     }
+    let paired = match &options.certify {
+        Some(certify) => Some(reference_storms(&draws, &sample, options, certify, pairs_of)?),
+        None => None,
+    };
     let confidence = options.confidence;
-    let finite = sample.finite_peaks();
-    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&finite, 50));
-    let estimates: Vec<Estimate> = thresholds.iter().map(|&x| sample.exceedance(x, confidence)).collect();
-    let return_levels = options.return_periods.iter().map(|&t| return_level(&sample, &finite, t, confidence)).collect();
-    let reliability = options.limit.map(|limit| reliability(limit, sample.exceedance(limit, confidence)));
+    let mut levels = sample.finite_peaks();
+    let certified = |x: f64| paired.as_ref().map(|paired| paired.exceedance(&sample, x, confidence));
+    let estimate = |x: f64| certified(x).map_or_else(|| sample.exceedance(x, confidence), |point| point.estimate);
+    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&levels, 50));
+    let estimates: Vec<Estimate> = thresholds.iter().map(|&x| estimate(x)).collect();
+    let certification = paired.as_ref().map(|paired| {
+        let points: Vec<CertifiedPoint> = thresholds.iter().filter_map(|&x| certified(x)).collect();
+        levels.extend(paired.finite_peaks());
+        levels.sort_by(f64::total_cmp);
+        paired.certification(&points)
+    });
+    let return_levels = options.return_periods.iter().map(|&t| return_level(&levels, t, estimate)).collect();
+    let reliability = options.limit.map(|limit| reliability(limit, estimate(limit)));
     let climate = &options.climate;
     Ok(HazardCurve {
         annual_probability: estimates.iter().map(|e| e.probability).collect(),
@@ -255,17 +290,88 @@ pub fn hazard_curve(
         strata: strata.count(),
         sampling: options.sampling,
         confidence,
+        certification,
     })
 }
 
-/// The return level of period T: the first sampled peak where the estimate falls to
-/// 1 − exp(−1/T), and where
-/// each end of the band does (by bisection: every one of them falls with the level).
-fn return_level(sample: &StratifiedPeaks, all: &[f64], period: f64, confidence: f64) -> ReturnLevel {
+/// How an annual analysis draws its storms' inputs: every input from its law, the wind speed
+/// from the climate within each stratum.
+struct StormRows<'a> {
+    inputs: &'a InputModel,
+    wind: usize,
+    climate: &'a Marginal,
+    strata: &'a WindStrata,
+}
+
+impl StormRows<'_> {
+    /// `counts[s]` rows in each stratum s in turn, and their speeds.
+    fn rows(&self, counts: &[usize], rng: &mut Rng) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+        let speeds = self.strata.speeds(self.climate, counts, rng);
+        if let Some(&v) = speeds.iter().find(|v| WindLoads::check_speed(**v).is_err()) {
+            return Err(Error::invalid("climate", format!("puts weight on a speed the wind model refuses ({v} m/s)")));
+        }
+        let mut rows = monte_carlo(self.inputs, speeds.len(), rng);
+        for (row, &v) in rows.iter_mut().zip(&speeds) {
+            row[self.wind] = v;
+        }
+        Ok((rows, speeds))
+    }
+}
+
+/// A pilot's storms per stratum: all of `storms` for one stratum, else one in `share` shared
+/// equally, at least two per stratum (errs naming `field` below that).
+fn pilot(strata: &WindStrata, storms: usize, share: usize, field: &str) -> Result<Vec<usize>> {
+    let share = if strata.count() == 1 { 1 } else { share };
+    let counts = vec![storms / share / strata.count(); strata.count()];
+    if counts[0] < 2 {
+        return Err(Error::invalid(
+            field,
+            format!("must be at least {} for the {} strata", 2 * share * strata.count(), strata.count()),
+        ));
+    }
+    Ok(counts)
+}
+
+/// The levels an allocation aims at: the return levels asked for, the 10-year one and the
+/// limit's, read off `estimate`.
+fn targets(sample: &StratifiedPeaks, options: &HazardOptions, estimate: impl Fn(f64) -> Estimate) -> Vec<f64> {
+    let all = sample.finite_peaks();
+    let periods = options.return_periods.iter().chain(std::iter::once(&ALWAYS_TARGETED_PERIOD));
+    periods.filter_map(|&t| return_level(&all, t, &estimate).value).chain(options.limit).collect()
+}
+
+/// The reference storms of a certified curve: a pilot, then Neyman's allocation on the mismatch
+/// ([`PairedStrata::allocation`]), drawn like the metamodel's storms from their own seed.
+fn reference_storms(
+    draws: &StormRows,
+    sample: &StratifiedPeaks,
+    options: &HazardOptions,
+    certify: &CertifyOptions,
+    mut pairs_of: impl FnMut(&[Vec<f64>], usize) -> Result<Vec<PairedPeak>>,
+) -> Result<PairedStrata> {
+    let mut rng = rng_from_seed(reference_storm_seed(options.seed));
+    let storms = certify.reference_storms;
+    let pilot_counts = pilot(draws.strata, storms, REFERENCE_PILOT_SHARE, "certify.reference_storms")?;
+    let (rows, _) = draws.rows(&pilot_counts, &mut rng)?;
+    let mut paired = PairedStrata::new(&pilot_counts, &pairs_of(&rows, 0)?, certify.order);
+    let budget = storms - rows.len();
+    if draws.strata.count() > 1 && budget > 0 {
+        let counts =
+            paired.allocation(sample, &targets(sample, options, |x| sample.exceedance(x, options.confidence)), budget);
+        let (more, _) = draws.rows(&counts, &mut rng)?;
+        paired.add(&counts, &pairs_of(&more, rows.len())?);
+    }
+    Ok(paired)
+}
+
+/// The return level of period T: the first of the ascending `levels` where the estimate falls to
+/// 1 − exp(−1/T), and where each end of the band does (by bisection: every one of them falls with
+/// the level, a certified curve's up to its noise).
+fn return_level(levels: &[f64], period: f64, estimate: impl Fn(f64) -> Estimate) -> ReturnLevel {
     let target = annual_probability_of_period(period);
     let crossing = |end: fn(&Estimate) -> f64| {
-        let i = all.partition_point(|&x| end(&sample.exceedance(x, confidence)) > target);
-        all.get(i).copied()
+        let i = levels.partition_point(|&x| end(&estimate(x)) > target);
+        levels.get(i).copied()
     };
     ReturnLevel {
         return_period_years: period,
@@ -302,15 +408,23 @@ pub fn metamodel_hazard(
 ) -> Result<HazardCurve> {
     response.check(&study.structure)?;
     let calibrated = metamodel.calibrated_range(study, WIND_SPEED)?;
-    hazard_curve(&study.inputs, options, calibrated, |rows, first| {
+    let peaks_of = |rows: &[Vec<f64>], first: usize| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
         let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
         peaks_at(metamodel, &draws, response, observer)
-    })
+    };
+    let pairs_of = |rows: &[Vec<f64>], first: usize| {
+        let storms: Vec<usize> = (first..first + rows.len()).collect();
+        let seed = reference_storm_seed(options.seed);
+        let draws = Draws { study, rows, storms: &storms, seed, on_divergence: OnDivergence::Exceed };
+        let order = options.certify.map_or(Order::Reduced, |c| c.order);
+        paired_peaks_at(metamodel, &draws, response, order, observer)
+    };
+    hazard_curve(&study.inputs, options, calibrated, peaks_of, pairs_of)
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::analysis::sampling::NAMED_DIVERGED_STORMS;
     use crate::uncertainty::Input;
@@ -318,7 +432,7 @@ mod tests {
 
     /// peak = v·exp(σ z), z ~ N(0, 1): λ(x) = ∫ Φ(ln(v/x)/σ) f(v) dv, here by Simpson's rule on the
     /// climate's quantiles (an independent computation).
-    fn lognormal_scatter_annual(climate: &Marginal, sigma: f64, x: f64) -> f64 {
+    pub(in crate::analysis) fn lognormal_scatter_annual(climate: &Marginal, sigma: f64, x: f64) -> f64 {
         // Over ξ = Φ⁻¹(F(v)) from −8 to 8, where φ(ξ) dξ = f(v) dv.
         let normal = Normal::standard();
         let integrand = |xi: f64| normal.pdf(xi) * normal.cdf((climate.from_standard(xi) / x).ln() / sigma);
@@ -331,6 +445,10 @@ mod tests {
             Input { name: WIND_SPEED.into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } },
         ])
         .unwrap()
+    }
+
+    fn not_paired(_: &[Vec<f64>], _: usize) -> Result<Vec<PairedPeak>> {
+        unreachable!("not certified")
     }
 
     fn toy_peaks(sigma: f64) -> impl FnMut(&[Vec<f64>], usize) -> Result<Vec<f64>> {
@@ -354,6 +472,7 @@ mod tests {
             limit: None,
             confidence: 0.95,
             sampling: Sampling::Stratified,
+            certify: None,
         };
         // The exact level of each probability, by bisection on the quadrature.
         let level = |p: f64| {
@@ -366,7 +485,7 @@ mod tests {
         };
         let levels: Vec<f64> = [1e-1, 1e-2, 1e-3, 1e-4, 1e-5].iter().map(|&p| level(p)).collect();
         options.thresholds = Some(levels.clone());
-        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma)).unwrap();
+        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma), not_paired).unwrap();
         for (i, p) in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5].iter().enumerate() {
             let cov = curve.cov[i].unwrap();
             assert!(cov < 0.3, "p = {p}: cov {cov}");
@@ -392,7 +511,7 @@ mod tests {
         // one with 0.181 (not 1 and 0.2).
         options.thresholds = None;
         options.return_periods = vec![1.0, 5.0];
-        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma)).unwrap();
+        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma), not_paired).unwrap();
         for r in &curve.return_levels {
             let exact = level(1.0 - (-1.0 / r.return_period_years).exp());
             let (lo, hi) = (r.lower.unwrap(), r.upper.unwrap());
@@ -416,8 +535,9 @@ mod tests {
                 limit: Some(45.0),
                 confidence: 0.95,
                 sampling,
+                certify: None,
             };
-            hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1)).unwrap()
+            hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1), not_paired).unwrap()
         };
         let (stratified, plain) = (run(Sampling::Stratified), run(Sampling::MonteCarlo));
         for i in 0..2 {
@@ -444,13 +564,14 @@ mod tests {
             limit: None,
             confidence: 0.95,
             sampling: Sampling::MonteCarlo,
+            certify: None,
         };
         let mut ran = Vec::new();
-        let curve = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], |rows, first| {
+        let peaks_of = |rows: &[Vec<f64>], first: usize| {
             ran.extend(rows.iter().enumerate().map(|(i, r)| (first + i, r.clone())));
             Ok(rows.iter().map(|r| if r[1] > 40.0 { f64::INFINITY } else { r[1] }).collect())
-        })
-        .unwrap();
+        };
+        let curve = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], peaks_of, not_paired).unwrap();
         let diverged: Vec<_> = ran.iter().filter(|(_, r)| r[1] > 40.0).collect();
         assert!(diverged.len() > NAMED_DIVERGED_STORMS, "{} diverged", diverged.len());
         assert_eq!(curve.diverged_storms, diverged.len());
@@ -473,6 +594,7 @@ mod tests {
             limit: None,
             confidence: 0.95,
             sampling: Sampling::Stratified,
+            certify: None,
         };
         let cases = [
             ("return_periods", HazardOptions { return_periods: vec![0.5], ..base.clone() }),
@@ -482,7 +604,7 @@ mod tests {
             ("confidence", HazardOptions { confidence: 1.0, ..base.clone() }),
         ];
         for (field, options) in cases {
-            let err = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1)).unwrap_err();
+            let err = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1), not_paired).unwrap_err();
             assert!(err.to_string().starts_with(field), "{field}: {err}");
         }
     }

@@ -2,6 +2,7 @@
 //! annual curves and return levels under a wind climate, fragility curves, Sobol indices, and the
 //! validation of a metamodel against the reference.
 
+mod certified_hazard;
 mod certify;
 mod climate;
 mod exceedance;
@@ -20,6 +21,7 @@ mod strata;
 mod validated_responses;
 mod validation;
 
+pub use certified_hazard::HazardCertification;
 pub use certify::{
     Certification, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, certify_exceedance, check_reference_storms,
     exceedance_figure,

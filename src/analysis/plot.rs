@@ -147,14 +147,26 @@ pub fn validation_svg(reference: &[f64], metamodel: &[f64], curves: &[(&str, &Ex
     svg
 }
 
+/// A curve to draw: its name, probabilities, band and colour.
+type DrawnCurve<'a> = (&'a str, &'a [f64], &'a [f64], &'a [f64], RGBColor);
+
 /// The annual exceedance curve with its band on a logarithmic probability axis, the mean
-/// recurrence interval 1/P on the right-hand axis, and the return levels marked.
+/// recurrence interval 1/P on the right-hand axis, and the return levels marked; a certified one
+/// beside the metamodel's own.
 pub fn hazard_svg(curve: &HazardCurve, x_label: &str) -> String {
     let positive = |p: f64| p.is_finite() && p > 0.0;
-    let floor = curve
-        .lower
+    // A certified curve beside the metamodel's own, as an uncertified answer would have drawn it.
+    let mut drawn: Vec<DrawnCurve> = Vec::new();
+    if let Some(c) = &curve.certification {
+        let p = &c.points;
+        drawn.push(("PC-NARX", &p.metamodel_probabilities, &p.metamodel_lower, &p.metamodel_upper, COLOURS[0]));
+        drawn.push(("certified", &curve.annual_probability, &curve.lower, &curve.upper, COLOURS[2]));
+    } else {
+        drawn.push(("PC-NARX", &curve.annual_probability, &curve.lower, &curve.upper, COLOURS[0]));
+    }
+    let floor = drawn
         .iter()
-        .chain(&curve.annual_probability)
+        .flat_map(|(_, p, lower, _, _)| p.iter().chain(lower.iter()))
         .copied()
         .filter(|p| positive(*p))
         .fold(1.0, f64::min)
@@ -175,21 +187,25 @@ pub fn hazard_svg(curve: &HazardCurve, x_label: &str) -> String {
         let _ = chart.configure_mesh().x_desc(x_label).y_desc("annual P(peak > x)").draw();
         let _ = chart.configure_secondary_axes().y_desc("mean recurrence interval (years)").draw();
         let clip = |p: f64| p.clamp(floor, 1.0);
-        let band: Vec<(f64, f64)> = curve
-            .thresholds
-            .iter()
-            .zip(&curve.upper)
-            .map(|(x, p)| (*x, clip(*p)))
-            .chain(curve.thresholds.iter().zip(&curve.lower).rev().map(|(x, p)| (*x, clip(*p))))
-            .collect();
-        let _ = chart.draw_series(std::iter::once(Polygon::new(band, COLOURS[0].mix(0.15).filled())));
-        let line = curve
-            .thresholds
-            .iter()
-            .zip(&curve.annual_probability)
-            .filter(|(_, p)| positive(**p))
-            .map(|(x, p)| (*x, *p));
-        let _ = chart.draw_series(LineSeries::new(line, COLOURS[0].stroke_width(2)));
+        let x = &curve.thresholds;
+        for &(name, probabilities, lower, upper, colour) in &drawn {
+            let band: Vec<(f64, f64)> = x
+                .iter()
+                .zip(upper)
+                .map(|(x, p)| (*x, clip(*p)))
+                .chain(x.iter().zip(lower).rev().map(|(x, p)| (*x, clip(*p))))
+                .collect();
+            let _ = chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.15).filled())));
+            let line = x.iter().zip(probabilities).filter(|(_, p)| positive(**p)).map(|(x, p)| (*x, *p));
+            if let Ok(series) = chart.draw_series(LineSeries::new(line, colour.stroke_width(2))) {
+                series
+                    .label(name)
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2)));
+            }
+        }
+        if drawn.len() > 1 {
+            let _ = chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw();
+        }
         let marks = curve.return_levels.iter().filter_map(|r| Some((r.value?, 1.0 / r.return_period_years)));
         let _ = chart.draw_series(marks.clone().map(|(x, p)| Circle::new((x, p), 4, COLOURS[1].filled())));
         let _ = chart.draw_series(marks.map(|(x, p)| {

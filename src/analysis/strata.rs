@@ -153,7 +153,7 @@ impl StratifiedPeaks {
     }
 
     /// The point estimate of P(peak > x), without its band.
-    fn exceedance_fraction(&self, x: f64) -> f64 {
+    pub(super) fn exceedance_fraction(&self, x: f64) -> f64 {
         let sampled = self.weights.iter().zip(&self.strata).map(|(w, stratum)| {
             w * (stratum.len() - stratum.partition_point(|s| s.0 <= x)) as f64 / stratum.len() as f64
         });
@@ -167,11 +167,45 @@ impl StratifiedPeaks {
         all
     }
 
-    /// P(peak > x) with its band at `confidence`. The band of the sampled part is Wilson's at the
-    /// effective sample size n* = p̂(1 − p̂)/Var p̂ (Kish's design effect; the fraction's own when
-    /// no storm exceeds), and Clopper-Pearson's for one stratum; the unsampled tail widens it by
-    /// its probability.
+    /// The climate's probability of each stratum.
+    pub(super) fn weights(&self) -> &[f64] {
+        &self.weights
+    }
+
+    /// The probability of storms too rare to be run, counted as exceeding.
+    pub(super) fn unsampled(&self) -> f64 {
+        self.unsampled
+    }
+
+    /// Stratum `s`'s peaks within [lo, hi], ascending, and its number of storms; none when it holds
+    /// a diverged storm (whose peak could be anywhere).
+    pub(super) fn window(&self, s: usize, lo: f64, hi: f64) -> Option<(Vec<f64>, usize)> {
+        let stratum = &self.strata[s];
+        if stratum.last().is_some_and(|p| p.0.is_infinite()) {
+            return None;
+        }
+        let (first, end) = (stratum.partition_point(|p| p.0 < lo), stratum.partition_point(|p| p.0 <= hi));
+        Some((stratum[first..end.max(first)].iter().map(|p| p.0).collect(), stratum.len()))
+    }
+
+    /// P(peak > x) with its band at `confidence`: the sampled strata's part ([`Self::sampled`])
+    /// and the unsampled tail, which widens the band by its probability.
     pub fn exceedance(&self, x: f64, confidence: f64) -> Estimate {
+        let part = self.sampled(x, confidence);
+        let probability = part.probability + self.unsampled;
+        Estimate {
+            probability,
+            lower: part.lower,
+            upper: (part.upper + self.unsampled).min(1.0),
+            cov: (part.probability > 0.0).then(|| part.variance.sqrt() / probability),
+            beyond: part.beyond + self.unsampled,
+        }
+    }
+
+    /// The sampled strata's part of P(peak > x). Its band is Wilson's at the effective sample size
+    /// n* = p̂(1 − p̂)/Var p̂ (Kish's design effect; the fraction's own when no storm exceeds), and
+    /// Clopper-Pearson's for one stratum.
+    pub(super) fn sampled(&self, x: f64, confidence: f64) -> SampledPart {
         let sampled: f64 = self.weights.iter().sum();
         let (mut p, mut variance, mut beyond, mut kish) = (0.0, 0.0, 0.0, 0.0);
         for (w, stratum) in self.weights.iter().zip(&self.strata) {
@@ -194,15 +228,20 @@ impl StratifiedPeaks {
                 if variance > 0.0 { share * (1.0 - share) / (variance / sampled.powi(2)) } else { 1.0 / kish };
             wilson(share, effective, confidence)
         };
-        let probability = p + self.unsampled;
-        Estimate {
-            probability,
-            lower: sampled * lo,
-            upper: (sampled * hi + self.unsampled).min(1.0),
-            cov: (p > 0.0).then(|| variance.sqrt() / probability),
-            beyond: beyond + self.unsampled,
-        }
+        SampledPart { probability: p, variance, lower: sampled * lo, upper: sampled * hi, beyond }
     }
+}
+
+/// The sampled strata's part of an exceedance probability.
+pub(super) struct SampledPart {
+    pub probability: f64,
+    /// The variance of `probability`.
+    pub variance: f64,
+    /// Its band.
+    pub lower: f64,
+    pub upper: f64,
+    /// The part of `probability` from storms outside the calibrated speeds.
+    pub beyond: f64,
 }
 
 /// Wilson's score interval for a proportion p̂ from n (effective) trials: closed form, sound for

@@ -164,6 +164,7 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         limit: None,
         confidence: 0.95,
         sampling: Sampling::Stratified,
+        certify: None,
     };
     let hazard_seconds = time(repetitions.min(3), |_| metamodel_hazard(&metamodel, &study, roof, &hazard, &Silent))?;
     rows.push(row(

@@ -1,7 +1,7 @@
 //! `windmeta hazard`: the annual exceedance curve of a peak response under a wind climate, its
 //! return levels and, at a limit, the reliability index.
 
-use super::args::{AnalysisArgs, ResponseArgs, answer, out_format};
+use super::args::{AnalysisArgs, CertifyArgs, ResponseArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
@@ -43,6 +43,9 @@ pub struct HazardArgs {
     pub samples: usize,
     #[arg(long, value_enum, default_value = "stratified")]
     pub sampling: SamplingArg,
+    /// With --certify N: N storms through both models, shared out over the wind strata.
+    #[command(flatten)]
+    pub certify: CertifyArgs,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the answer: .csv, .json or .svg by extension.
@@ -71,6 +74,7 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
             SamplingArg::Stratified => Sampling::Stratified,
             SamplingArg::MonteCarlo => Sampling::MonteCarlo,
         },
+        certify: args.certify.options(),
     };
     let response = args.response.response(&study)?;
     let started = Instant::now();
@@ -94,8 +98,14 @@ fn table(curve: &HazardCurve, what: &str, unit: &str, seconds: f64) -> String {
         "annual {what}: {} storms in {} strata ({:?}) in {seconds:.2} s\n",
         curve.samples, curve.strata, curve.sampling
     );
+    if let Some(c) = &curve.certification {
+        out += &format!(
+            "certified with {} reference storms ({:?} order) over the strata: {:?}\n",
+            c.points.reference_storms, c.points.order, c.reference_storms_per_stratum
+        );
+    }
     out += &format!(
-        "{:>10}  {:>10}  {:>10}  {:>10}  {:>6}  {:>10}\n",
+        "{:>10}  {:>10}  {:>10}  {:>10}  {:>6}  {:>10}",
         &format!("x ({})", unit),
         "P/year",
         "lower",
@@ -103,10 +113,14 @@ fn table(curve: &HazardCurve, what: &str, unit: &str, seconds: f64) -> String {
         "cov",
         "MRI (y)"
     );
+    if curve.certification.is_some() {
+        out += &format!("  {:>10}  {:>9}", "PC-NARX", "mismatch");
+    }
+    out += "\n";
     let step = (curve.thresholds.len() / 12).max(1);
     for i in (0..curve.thresholds.len()).step_by(step) {
         out += &format!(
-            "{:>10.5}  {:>10.3e}  {:>10.3e}  {:>10.3e}  {:>6}  {:>10}\n",
+            "{:>10.5}  {:>10.3e}  {:>10.3e}  {:>10.3e}  {:>6}  {:>10}",
             curve.thresholds[i],
             curve.annual_probability[i],
             curve.lower[i],
@@ -114,6 +128,10 @@ fn table(curve: &HazardCurve, what: &str, unit: &str, seconds: f64) -> String {
             curve.cov[i].map_or("-".into(), |c| format!("{c:.3}")),
             curve.mri_years[i].map_or("-".into(), |t| format!("{t:.4}")),
         );
+        if let Some(c) = &curve.certification {
+            out += &format!("  {:>10.3e}  {:>9.2e}", c.points.metamodel_probabilities[i], c.points.mismatch_rate[i]);
+        }
+        out += "\n";
     }
     out += &format!("{:>10}  {:>10}  {:>10}  {:>10}\n", "T (years)", &format!("x_T ({})", unit), "lower", "upper");
     for r in &curve.return_levels {

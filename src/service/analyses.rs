@@ -58,6 +58,10 @@ pub struct HazardRequest {
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
     pub confidence: f64,
     pub sampling: Sampling,
+    /// Certify the curve with this many storms run through both the reference model and the
+    /// metamodel, shared out over the wind strata where the two can disagree (at most the
+    /// request's storms and the server's bound). A certified request always runs as an operation.
+    pub certify: Option<CertifyOptions>,
 }
 
 impl Default for HazardRequest {
@@ -74,6 +78,7 @@ impl Default for HazardRequest {
             limit: None,
             confidence: 0.95,
             sampling: Sampling::Stratified,
+            certify: None,
         }
     }
 }
@@ -128,6 +133,7 @@ impl HazardRequest {
             limit: self.limit,
             confidence: self.confidence,
             sampling: self.sampling,
+            certify: self.certify,
         })
     }
 }
@@ -274,7 +280,8 @@ impl AnalysisRequest {
             AnalysisRequest::Fragility(r) => {
                 r.certify.map_or(0, |c| c.reference_storms.saturating_mul(r.wind_speeds.len()))
             }
-            AnalysisRequest::Hazard(_) | AnalysisRequest::Sensitivity(_) => 0,
+            AnalysisRequest::Hazard(r) => r.certify.map_or(0, |c| c.reference_storms),
+            AnalysisRequest::Sensitivity(_) => 0,
         }
     }
 

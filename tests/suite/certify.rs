@@ -1,9 +1,9 @@
 //! Certified curves on the shared fixture: the reference storms pair with the storms the metamodel
 //! itself would draw, the certified curve agrees with plain reference Monte Carlo within its band,
-//! and over HTTP a certified exceedance or fragility request is an operation whose answer carries
-//! the correction, its bad input refused naming the field.
+//! and over HTTP a certified exceedance, fragility or annual request is an operation whose answer
+//! carries the correction, its bad input refused naming the field.
 
-use crate::harness::app::{assert_problem, database, problem_details, spawn_app};
+use crate::harness::app::{TestApp, assert_problem, database, problem_details, spawn_app};
 use crate::harness::fixture;
 use serde_json::{Value, json};
 use std::time::Duration;
@@ -153,5 +153,43 @@ async fn a_certified_request_is_an_operation_with_its_correction() {
                           "certify": {"reference_storms": 600}});
     let (s, ct, body) = problem_details(app.post(&fragility, too_many).await).await;
     assert_problem(s, &ct, &body, 422, "certify.reference_storms");
+    certified_hazard(&app, &id).await;
     app.stop().await;
+}
+
+/// An annual curve certified with reference storms shared out over the wind strata: an
+/// operation whose probabilities are the metamodel's plus the correction, whose storms per
+/// stratum add up to those asked for at most, and whose return levels come from the certified
+/// curve; too few reference storms for the strata are refused naming the field.
+async fn certified_hazard(app: &TestApp, id: &str) {
+    let hazard = format!("/v1/metamodels/{id}/hazard");
+    let body = json!({"samples": 400, "seed": 4, "return_periods": [10, 100], "response": "acceleration",
+                      "limit": 0.5, "certify": {"reference_storms": 48}});
+    let (status, queued) = app.post_json(&hazard, body).await;
+    assert_eq!(status, 202, "{queued}");
+    let done = app.wait_for(queued["id"].as_str().unwrap(), &["succeeded", "failed"], Duration::from_secs(120)).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    let curve = &done["result"];
+    let certification = &curve["certification"];
+    let per_stratum: Vec<u64> =
+        certification["reference_storms_per_stratum"].as_array().unwrap().iter().map(|n| n.as_u64().unwrap()).collect();
+    assert_eq!(per_stratum.len() as u64, curve["strata"].as_u64().unwrap());
+    assert_eq!(per_stratum.iter().sum::<u64>(), certification["reference_storms"].as_u64().unwrap());
+    assert!(per_stratum.iter().sum::<u64>() <= 48 && per_stratum.iter().all(|&n| n >= 3), "{per_stratum:?}");
+    let number = |v: &Value| v.as_f64().unwrap();
+    let count = curve["thresholds"].as_array().unwrap().len();
+    for key in ["metamodel_probabilities", "mismatch_rate", "correction", "uncorrected_bound"] {
+        assert_eq!(certification[key].as_array().map(Vec::len), Some(count), "{key}");
+    }
+    for i in 0..count {
+        let p = number(&curve["annual_probability"][i]);
+        let expected = number(&certification["metamodel_probabilities"][i]) + number(&certification["correction"][i]);
+        assert!((p - expected.clamp(0.0, 1.0)).abs() < 1e-12, "threshold {i}: {p} against {expected}");
+        assert!(number(&curve["lower"][i]) <= p && p <= number(&curve["upper"][i]), "threshold {i}");
+    }
+    assert_eq!(curve["return_levels"].as_array().map(Vec::len), Some(2));
+    assert!(curve["reliability"]["annual_probability"].is_number(), "{curve}");
+    let too_few = json!({"samples": 400, "return_periods": [10, 100], "certify": {"reference_storms": 10}});
+    let (s, ct, body) = problem_details(app.post(&hazard, too_few).await).await;
+    assert_problem(s, &ct, &body, 422, "certify.reference_storms");
 }
