@@ -17,8 +17,8 @@
 //! A stratum where no pair disagreed about x and 3·w_s·ρ_s(x) is narrower than its correction's
 //! band is left uncorrected, and 3·w_s·ρ_s(x) is added to the band as a bound on what it might have
 //! corrected. The factor three is what the certification assumes: that no stratum's mismatches
-//! outnumber the pooled errors' prediction threefold. A stratum holding a diverged metamodel run is
-//! always corrected.
+//! outnumber the pooled errors' prediction threefold. A diverged metamodel storm (counted as
+//! exceeding) is a mismatch at worst: its share of the stratum is added to the bound as it is.
 //!
 //! The reference storms go half to a pilot, equally over the strata, and the rest by Neyman's
 //! allocation on the mismatch: N_s ∝ w_s·√q̃_s (the difference's variance is about q_s/N_s), q̃_s the
@@ -55,9 +55,9 @@ pub struct HazardCertification {
 pub struct PairedStrata {
     strata: Vec<Vec<PairedPeak>>,
     order: Order,
-    /// Every pair's ln(peak_H/peak_L), ascending; none when a pair's metamodel diverged or one
-    /// model's peak is zero where the other's is not.
-    errors: Option<Vec<f64>>,
+    /// The pairs' ln(peak_H/peak_L), ascending (a pair whose metamodel diverged has none: it
+    /// shows as a mismatch in its own stratum).
+    errors: Vec<f64>,
 }
 
 /// A certified annual probability and what made it.
@@ -75,7 +75,7 @@ pub struct CertifiedPoint {
 impl PairedStrata {
     /// `pairs` in the order of the strata, `counts[s]` of them in stratum s.
     pub fn new(counts: &[usize], pairs: &[PairedPeak], order: Order) -> Self {
-        let mut paired = PairedStrata { strata: vec![Vec::new(); counts.len()], order, errors: None };
+        let mut paired = PairedStrata { strata: vec![Vec::new(); counts.len()], order, errors: Vec::new() };
         paired.add(counts, pairs);
         paired
     }
@@ -87,10 +87,8 @@ impl PairedStrata {
             stratum.extend_from_slice(&pairs[first..first + count]);
             first += count;
         }
-        self.errors = self.strata.iter().flatten().map(log_error).collect::<Option<Vec<f64>>>().map(|mut errors| {
-            errors.sort_by(f64::total_cmp);
-            errors
-        });
+        self.errors = self.strata.iter().flatten().filter_map(log_error).collect();
+        self.errors.sort_by(f64::total_cmp);
     }
 
     /// Every finite peak of the pairs, the reference's and the metamodel's.
@@ -108,25 +106,28 @@ impl PairedStrata {
     }
 
     /// ρ_s(x): the mismatch rate at x that the pairs' pooled errors predict for stratum `s`'s
-    /// metamodel storms; none where they cannot (no errors, or a diverged storm in the stratum).
-    fn predicted_mismatch(&self, s: usize, metamodel: &StratifiedPeaks, x: f64) -> Option<f64> {
-        let errors = self.errors.as_ref()?;
+    /// metamodel storms, and the share of them that diverged (each a mismatch, at worst); none
+    /// where the pairs give no errors.
+    fn predicted_mismatch(&self, s: usize, metamodel: &StratifiedPeaks, x: f64) -> Option<(f64, f64)> {
+        let errors = &self.errors;
         let (&least, &most) = (errors.first()?, errors.last()?);
         let n = errors.len() as f64;
         let (lo, hi) = (x * (-most.max(0.0)).exp(), x * (-least.min(0.0)).exp());
-        let (window, stratum_storms) = metamodel.window(s, lo, hi)?;
+        let (window, diverged, storms) = metamodel.window(s, lo, hi);
         let crossing: f64 = window
             .iter()
-            .map(|&peak| {
-                let gap = (x / peak).ln();
-                if peak <= x {
-                    (errors.len() - errors.partition_point(|&e| e <= gap)) as f64 / n
-                } else {
-                    errors.partition_point(|&e| e <= gap) as f64 / n
-                }
+            .map(|&(peak, _)| {
+                let below = errors.partition_point(|&e| e <= (x / peak).ln()) as f64 / n;
+                if peak <= x { 1.0 - below } else { below }
             })
             .sum();
-        Some(crossing / stratum_storms as f64)
+        Some((crossing / storms as f64, diverged as f64 / storms as f64))
+    }
+
+    /// What leaving stratum `s` uncorrected at x may cost: w_s·(3·ρ_s + its diverged share).
+    fn uncorrected_bound(&self, s: usize, metamodel: &StratifiedPeaks, x: f64) -> Option<f64> {
+        let (predicted, diverged) = self.predicted_mismatch(s, metamodel, x)?;
+        Some(metamodel.weights()[s] * (PREDICTION_SAFETY * predicted + diverged))
     }
 
     /// Neyman's allocation of `budget` more pairs on the mismatch at the `targets`: n_s ∝
@@ -142,7 +143,7 @@ impl PairedStrata {
                 let observed = (h + l + 0.5) / (self.strata[s].len() as f64 + 1.0);
                 let q = self
                     .predicted_mismatch(s, metamodel, x)
-                    .map_or(observed, |p| p.max((h + l) / self.strata[s].len() as f64));
+                    .map_or(observed, |(p, diverged)| (p + diverged).max((h + l) / self.strata[s].len() as f64));
                 *score += weights[s] * q.sqrt() / total;
             }
         }
@@ -167,8 +168,7 @@ impl PairedStrata {
             let (h, l) = self.mismatches(s, x);
             mismatch_rate += w * (h + l) / n;
             let adjusted = AdjustedDifference::bonett_price(h, l, n);
-            let predicted = self.predicted_mismatch(s, metamodel, x).map(|rho| PREDICTION_SAFETY * w * rho);
-            match predicted {
+            match self.uncorrected_bound(s, metamodel, x) {
                 Some(uncorrected) if h + l == 0.0 && uncorrected < z * w * adjusted.variance.sqrt() => {
                     bound += uncorrected;
                 }

@@ -177,15 +177,14 @@ impl StratifiedPeaks {
         self.unsampled
     }
 
-    /// Stratum `s`'s peaks within [lo, hi], ascending, and its number of storms; none when it holds
-    /// a diverged storm (whose peak could be anywhere).
-    pub(super) fn window(&self, s: usize, lo: f64, hi: f64) -> Option<(Vec<f64>, usize)> {
+    /// Stratum `s`'s finite peaks within [lo, hi], ascending, its diverged storms (whose peaks
+    /// are infinite) and its number of storms.
+    pub(super) fn window(&self, s: usize, lo: f64, hi: f64) -> (&[(f64, bool)], usize, usize) {
         let stratum = &self.strata[s];
-        if stratum.last().is_some_and(|p| p.0.is_infinite()) {
-            return None;
-        }
-        let (first, end) = (stratum.partition_point(|p| p.0 < lo), stratum.partition_point(|p| p.0 <= hi));
-        Some((stratum[first..end.max(first)].iter().map(|p| p.0).collect(), stratum.len()))
+        let finite = stratum.partition_point(|p| p.0.is_finite());
+        let first = stratum.partition_point(|p| p.0 < lo).min(finite);
+        let end = stratum.partition_point(|p| p.0 <= hi).clamp(first, finite);
+        (&stratum[first..end], stratum.len() - finite, stratum.len())
     }
 
     /// P(peak > x) with its band at `confidence`: the sampled strata's part ([`Self::sampled`])

@@ -461,6 +461,13 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     assert_eq!(text_of(&browser, "#hazard-table tbody tr:first-child td:first-child").await, "1 year");
     let series = "return document.querySelectorAll('#hazard-chart polyline[data-series]').length;";
     assert_eq!(browser.execute(series, vec![]).await.unwrap(), json!(2));
+    // Certified over the wind strata: the certified curve beside the metamodel's own.
+    set_value(&browser, "#hazard-certify", "40").await;
+    click(&browser, "#hazard-form button[type=submit]").await;
+    let certified = "document.querySelectorAll('#hazard-chart polyline[data-series]').length === 3 \
+                     && document.querySelector('#hazard-chart svg').textContent.includes('metamodel alone')";
+    wait_until(&browser, certified, long).await;
+    set_value(&browser, "#hazard-certify", "").await;
     set_value(&browser, "#fragility-samples", "20").await;
     set_value(&browser, "#fragility-thresholds", "0.4, 0.6").await;
     click(&browser, "#fragility-form button[type=submit]").await;

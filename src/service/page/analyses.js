@@ -19,7 +19,34 @@ export function setUpAnalysisForms() {
     $$('[data-error]', fields).forEach((slot) => { slot.id = `${prefix}-${slot.dataset.error}-error`; });
     $(`#${prefix}-samples`, fields).value = form.dataset.samples;
     form.prepend(fields);
+    if ('certify' in form.dataset) form.insertBefore(certifyFields(prefix), $('.actions', form));
   }
+}
+
+/** The fields of a certified answer (reference storms and model), named for the form `prefix`. */
+function certifyFields(prefix) {
+  const fields = $('#certify-fields').content.cloneNode(true);
+  $$('[data-name]', fields).forEach((input) => {
+    input.id = `${prefix}-${input.dataset.name}`;
+    input.name = input.dataset.field;
+  });
+  $$('[data-for]', fields).forEach((label) => label.setAttribute('for', `${prefix}-${label.dataset.for}`));
+  $$('[data-hint-of]', fields).forEach((hint) => { hint.id = `${prefix}-${hint.dataset.hintOf}-hint`; });
+  $$('[data-error]', fields).forEach((slot) => { slot.id = `${prefix}-${slot.dataset.error}-error`; });
+  $(`#${prefix}-certify`, fields).setAttribute('aria-describedby', `${prefix}-certify-hint ${prefix}-certify-error`);
+  return fields;
+}
+
+/** The certification a form asks for into `request`; false after showing what is wrong. */
+function certifyField(form, prefix, request) {
+  const errors = [];
+  const referenceStorms = numberField($(`#${prefix}-certify`), errors, true);
+  if (errors.length) {
+    showProblem(form, prefix, new ApiProblem(422, { title: 'Not sent', detail: '', errors }));
+    return false;
+  }
+  if (referenceStorms !== undefined) request.certify = { reference_storms: referenceStorms, order: $(`#${prefix}-certify-order`).value };
+  return true;
 }
 
 /** Bounds of the chosen metamodel's study on the analyses' fields. */
@@ -146,13 +173,7 @@ export async function explore(event) {
   const fixed = heldInputs(form);
   if (!fixed) return;
   if (Object.keys(fixed).length) request.fixed = fixed;
-  const errors = [];
-  const referenceStorms = numberField($('#explore-certify'), errors, true);
-  if (errors.length) {
-    showProblem(form, 'explore', new ApiProblem(422, { title: 'Not sent', detail: '', errors }));
-    return;
-  }
-  if (referenceStorms !== undefined) request.certify = { reference_storms: referenceStorms, order: $('#explore-certify-order').value };
+  if (!certifyField(form, 'explore', request)) return;
   const answer = await runAnalysis(form, 'explore', 'exceedance', request);
   if (!answer) return;
   const others = Object.entries(fixed).filter(([name]) => name !== 'wind_speed').map(([name, value]) => `${name} ${format(value)}`);
@@ -209,7 +230,7 @@ export async function hazard(event) {
   event.preventDefault();
   const form = event.target;
   const request = analysisRequest(form, 'hazard');
-  if (!request || !hazardFields(form, request)) return;
+  if (!request || !hazardFields(form, request) || !certifyField(form, 'hazard', request)) return;
   const answer = await runAnalysis(form, 'hazard', 'hazard', request);
   if (!answer) return;
   const unit = UNITS[answer.response.kind];
@@ -220,7 +241,7 @@ export async function hazard(event) {
   $('#hazard-chart').replaceChildren(Charts.lines({
     title: `Annual exceedance: ${responseLabel(answer)}`, xLabel: `${answer.response.kind === 'rms_acceleration' ? 'RMS' : 'peak'} x (${unit})`, yLabel: 'annual probability of exceedance', yLog: true,
     series: [
-      { name: `${answer.samples} storms`, x: answer.thresholds, y: answer.annual_probability, lower: answer.lower, upper: answer.upper },
+      ...hazardSeries(answer),
       { name: `of which from speeds outside the calibrated ${format(answer.calibrated_wind_range[0])}–${format(answer.calibrated_wind_range[1])} m/s`, x: answer.thresholds, y: answer.probability_beyond_calibrated_range },
     ],
     describe: (s, i) => `x = ${format(s.x[i])} ${unit}: ${format(s.y[i])} a year [${format(s.lower[i])}, ${format(s.upper[i])}], return period ${s.y[i] > 0 && s.y[i] < 1 ? format(-1 / Math.log1p(-s.y[i])) : '–'} years`,
@@ -233,6 +254,14 @@ export async function hazard(event) {
     return row;
   }));
   $('#hazard-notes').textContent = `Calibrated wind speeds ${format(answer.calibrated_wind_range[0])}–${format(answer.calibrated_wind_range[1])} m/s; the climate's probability outside them ${format(answer.climate_beyond_calibrated_range)}, where the metamodel extrapolates (the second curve: the part of each annual probability from those speeds). Climate: ${describeMarginal(answer.climate)}.${answer.diverged_storms ? ` ${answer.diverged_storms} storms diverged (counted as exceeding every threshold); the first: ${answer.first_diverged.map(describeDiverged).join('; ')}.` : ''}`;
+}
+
+/** The annual curve's series: a certified one with the metamodel's own curve beside it. */
+function hazardSeries(answer) {
+  const c = answer.certification;
+  const own = { name: c ? `certified with ${c.reference_storms} reference storms (${c.reference_storms_per_stratum.join(', ')} by stratum)` : `${answer.samples} storms`, x: answer.thresholds, y: answer.annual_probability, lower: answer.lower, upper: answer.upper };
+  if (!c) return [own];
+  return [own, { name: `metamodel alone, ${answer.samples} storms`, x: answer.thresholds, y: c.metamodel_probabilities, lower: c.metamodel_lower, upper: c.metamodel_upper }];
 }
 
 /** A diverged storm with the inputs it was run with. */
