@@ -73,7 +73,8 @@ pub fn certify_exceedance(
     let storms = options.reference_storms;
     let paired =
         paired_peaks(metamodel, study, inputs, storms, reference_storm_seed(seed), response, options.order, observer)?;
-    let (curve, certification) = certified_curve(metamodel_peaks, &paired, thresholds, options.order, confidence);
+    let CertifiedCurve { curve, certification, .. } =
+        certified_curve(metamodel_peaks, &paired, thresholds, options.order, confidence);
     Ok((curve, Some(certification)))
 }
 
@@ -115,6 +116,14 @@ pub fn check_reference_storms(storms: usize, samples: usize, field: &str) -> Res
     Ok(())
 }
 
+/// A certified curve, what its correction was, and the variance its band stands for at each
+/// threshold (the adjusted estimators' summed, before the band is clipped to [0, 1]).
+pub struct CertifiedCurve {
+    pub curve: ExceedanceCurve,
+    pub certification: Certification,
+    pub variance: Vec<f64>,
+}
+
 /// The certified curve at `thresholds` from the metamodel's own peaks and the paired storms, with
 /// what the correction was.
 pub fn certified_curve(
@@ -123,7 +132,7 @@ pub fn certified_curve(
     thresholds: &[f64],
     order: Order,
     confidence: f64,
-) -> (ExceedanceCurve, Certification) {
+) -> CertifiedCurve {
     let z = Normal::standard().inverse_cdf(0.5 + confidence / 2.0);
     let (m, n) = (metamodel_peaks.len() as f64, paired.len() as f64);
     let mut sorted = metamodel_peaks.to_vec();
@@ -136,6 +145,7 @@ pub fn certified_curve(
         samples: metamodel_peaks.len(),
         confidence,
     };
+    let mut variance = Vec::with_capacity(thresholds.len());
     let mut certification = Certification {
         reference_storms: paired.len(),
         order,
@@ -157,6 +167,7 @@ pub fn certified_curve(
             });
         let metamodel = AdjustedProportion::agresti_coull(exceeding, m, z);
         let correction = AdjustedDifference::bonett_price(only_reference, only_metamodel, n);
+        variance.push(metamodel.variance + correction.variance);
         let half_width = z * (metamodel.variance + correction.variance).sqrt();
         let centre = metamodel.centre + correction.centre;
         let estimate = exceeding / m + (only_reference - only_metamodel) / n;
@@ -173,7 +184,7 @@ pub fn certified_curve(
         certification.correction_lower.push((correction.centre - correction_half_width).max(-1.0));
         certification.correction_upper.push((correction.centre + correction_half_width).min(1.0));
     }
-    (curve, certification)
+    CertifiedCurve { curve, certification, variance }
 }
 
 /// The figure of an exceedance curve labelled `label`; a certified one beside the metamodel's own
@@ -256,7 +267,7 @@ mod tests {
         for _ in 0..repetitions {
             let metamodel: Vec<f64> = toy_storms(&mut rng, 10_000).iter().map(|p| p.metamodel).collect();
             let paired = toy_storms(&mut rng, 200);
-            let (curve, _) = certified_curve(&metamodel, &paired, &thresholds, Order::Reduced, 0.95);
+            let curve = certified_curve(&metamodel, &paired, &thresholds, Order::Reduced, 0.95).curve;
             let plain = super::super::exceedance::exceedance_curve(&metamodel, &thresholds, 0.95);
             for (i, &p) in levels.iter().enumerate() {
                 covered[i] += usize::from(curve.lower[i] <= p && p <= curve.upper[i]);
@@ -278,7 +289,8 @@ mod tests {
         let metamodel = [0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 1.5, 1.6, 1.7];
         let pair = |reference, metamodel| PairedPeak { reference, metamodel };
         let paired = [pair(2.0, 0.5), pair(0.2, 0.3), pair(3.0, 3.0), pair(0.1, 0.1)];
-        let (curve, certification) = certified_curve(&metamodel, &paired, &[1.0], Order::Reduced, 0.95);
+        let CertifiedCurve { curve, certification, .. } =
+            certified_curve(&metamodel, &paired, &[1.0], Order::Reduced, 0.95);
         assert!((curve.probabilities[0] - 0.55).abs() < 1e-12);
         assert_eq!(certification.metamodel_probabilities, vec![0.3]);
         assert_eq!(certification.mismatch_rate, vec![0.25]);

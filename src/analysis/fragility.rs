@@ -2,8 +2,10 @@
 //! storm's phases random, and per threshold the lognormal fragility P = Φ(ln(v/θ)/β) that
 //! engineers tabulate, fitted by maximum likelihood on the binomial counts (Baker 2015).
 
-use super::certify::{Certification, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, check_reference_storms};
-use super::exceedance::{ExceedanceCurve, check_confidence, clopper_pearson};
+use super::certify::{
+    Certification, CertifiedCurve, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, check_reference_storms,
+};
+use super::exceedance::{check_confidence, clopper_pearson};
 use super::hazard::WIND_SPEED;
 use super::reference_storms::{PairedPeak, paired_peaks_at, reference_storm_seed};
 use super::sampling::{DivergedStorm, check_samples, name_diverged};
@@ -165,7 +167,7 @@ pub fn fragility(
             let (rows, storms) =
                 rows_at_every_speed(inputs, wind, &options.wind_speeds, certify.reference_storms, seed);
             let paired = paired_of(&rows, &storms)?;
-            let per_speed: Vec<(ExceedanceCurve, Certification)> = peaks
+            let per_speed: Vec<CertifiedCurve> = peaks
                 .chunks(n)
                 .zip(paired.chunks(certify.reference_storms))
                 .map(|(peaks, paired)| certified_curve(peaks, paired, &options.thresholds, certify.order, confidence))
@@ -220,38 +222,37 @@ pub fn fragility(
 fn certified_fragility(
     i: usize,
     threshold: f64,
-    per_speed: &[(ExceedanceCurve, Certification)],
+    per_speed: &[CertifiedCurve],
     certify: &CertifyOptions,
     n: usize,
     sound: &[usize],
     sound_speeds: &[f64],
     confidence: f64,
 ) -> FragilityCurve {
-    let column = |f: &dyn Fn(&(ExceedanceCurve, Certification)) -> &[f64]| -> Vec<f64> {
-        per_speed.iter().map(|speed| f(speed)[i]).collect()
-    };
-    let probability = column(&|(c, _)| &c.probabilities);
-    let (lower, upper) = (column(&|(c, _)| &c.lower), column(&|(c, _)| &c.upper));
-    let z = Normal::standard().inverse_cdf(0.5 + confidence / 2.0);
-    // Effective storms: p(1 − p)/Var p, the variance read off the band; n where p is 0 or 1.
+    let column =
+        |f: &dyn Fn(&CertifiedCurve) -> &[f64]| -> Vec<f64> { per_speed.iter().map(|speed| f(speed)[i]).collect() };
+    let probability = column(&|c| &c.curve.probabilities);
+    let (lower, upper) = (column(&|c| &c.curve.lower), column(&|c| &c.curve.upper));
+    let variance = column(&|c| &c.variance);
+    // Effective storms: p(1 − p)/Var p with the variance the band stands for; n where p is 0 or 1.
     let trials: Vec<f64> = sound
         .iter()
         .map(|&j| {
-            let (p, sd) = (probability[j], (upper[j] - lower[j]) / (2.0 * z));
-            if p > 0.0 && p < 1.0 && sd > 0.0 { p * (1.0 - p) / (sd * sd) } else { n as f64 }
+            let p = probability[j];
+            if p > 0.0 && p < 1.0 && variance[j] > 0.0 { p * (1.0 - p) / variance[j] } else { n as f64 }
         })
         .collect();
     let counts: Vec<f64> = sound.iter().zip(&trials).map(|(&j, t)| probability[j] * t).collect();
     let certification = Certification {
         reference_storms: certify.reference_storms,
         order: certify.order,
-        metamodel_probabilities: column(&|(_, c)| &c.metamodel_probabilities),
-        metamodel_lower: column(&|(_, c)| &c.metamodel_lower),
-        metamodel_upper: column(&|(_, c)| &c.metamodel_upper),
-        mismatch_rate: column(&|(_, c)| &c.mismatch_rate),
-        correction: column(&|(_, c)| &c.correction),
-        correction_lower: column(&|(_, c)| &c.correction_lower),
-        correction_upper: column(&|(_, c)| &c.correction_upper),
+        metamodel_probabilities: column(&|c| &c.certification.metamodel_probabilities),
+        metamodel_lower: column(&|c| &c.certification.metamodel_lower),
+        metamodel_upper: column(&|c| &c.certification.metamodel_upper),
+        mismatch_rate: column(&|c| &c.certification.mismatch_rate),
+        correction: column(&|c| &c.certification.correction),
+        correction_lower: column(&|c| &c.certification.correction_lower),
+        correction_upper: column(&|c| &c.certification.correction_upper),
     };
     FragilityCurve {
         threshold,

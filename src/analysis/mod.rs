@@ -23,8 +23,8 @@ mod validation;
 
 pub use certified_hazard::HazardCertification;
 pub use certify::{
-    Certification, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, certify_exceedance, check_reference_storms,
-    exceedance_figure,
+    Certification, CertifiedCurve, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, certify_exceedance,
+    check_reference_storms, exceedance_figure,
 };
 pub use climate::{ClimateCoverage, ClimateSpec, annual_probability_of_period, period_of_annual_probability};
 pub use exceedance::{

@@ -473,6 +473,12 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     click(&browser, "#fragility-form button[type=submit]").await;
     wait_until(&browser, "document.querySelectorAll('#fragility-chart polyline[data-series]').length === 2", long)
         .await;
+    // Certified at each speed: each threshold's certified curve beside the metamodel's own.
+    set_value(&browser, "#fragility-certify", "8").await;
+    click(&browser, "#fragility-form button[type=submit]").await;
+    let certified = "document.querySelectorAll('#fragility-chart polyline[data-series]').length === 4 \
+                     && document.querySelector('#fragility-chart svg').textContent.includes('metamodel alone')";
+    wait_until(&browser, certified, long).await;
     set_value(&browser, "#sensitivity-samples", "64").await;
     click(&browser, "#sensitivity-form button[type=submit]").await;
     wait_until(&browser, "document.querySelectorAll('#sensitivity-table tbody tr').length >= 5", long).await;

@@ -301,17 +301,24 @@ export async function fragility(event) {
       return;
     }
   }
+  if (!certifyField(form, 'fragility', request)) return;
   const answer = await runAnalysis(form, 'fragility', 'fragility', request);
   if (!answer) return;
   const unit = UNITS[answer.response.kind];
   $('#fragility-chart').replaceChildren(Charts.lines({
     title: `Fragility: ${responseLabel(answer)}, ${answer.samples_per_speed} storms per speed`, xLabel: 'wind speed at 10 m (m/s)', yLabel: 'P(peak > threshold | speed)', yMin: 0, yMax: 1,
-    series: answer.curves.map((curve) => ({
-      name: `${format(curve.threshold)} ${unit}${curve.lognormal ? ` (θ ${format(curve.lognormal.median_speed)} m/s, β ${format(curve.lognormal.dispersion)})` : ''}`,
-      x: answer.wind_speeds, y: curve.probability, lower: curve.lower, upper: curve.upper, points: true,
-    })),
+    series: answer.curves.flatMap((curve) => fragilitySeries(answer, curve, unit)),
     describe: (s, i) => `${s.name}: ${format(s.x[i])} m/s → ${format(s.y[i])} [${format(s.lower[i])}, ${format(s.upper[i])}]`,
   }));
+}
+
+/** A threshold's fragility series: a certified one with the metamodel's own beside it. */
+function fragilitySeries(answer, curve, unit) {
+  const c = curve.certification;
+  const fit = curve.lognormal ? ` (θ ${format(curve.lognormal.median_speed)} m/s, β ${format(curve.lognormal.dispersion)})` : '';
+  const own = { name: `${format(curve.threshold)} ${unit}${fit}${c ? `, certified with ${c.reference_storms} reference storms per speed` : ''}`, x: answer.wind_speeds, y: curve.probability, lower: curve.lower, upper: curve.upper, points: true };
+  if (!c) return [own];
+  return [own, { name: `${format(curve.threshold)} ${unit}, metamodel alone`, x: answer.wind_speeds, y: c.metamodel_probabilities, lower: c.metamodel_lower, upper: c.metamodel_upper, points: true }];
 }
 
 export async function sensitivity(event) {
