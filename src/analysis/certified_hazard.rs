@@ -25,10 +25,12 @@
 //! larger of the observed and the predicted rate, summed over the return levels asked for each
 //! weighted by 1/P(x)², as the metamodel's storms are.
 
-use super::certify::{AdjustedDifference, Certification};
+use super::certify::{AdjustedDifference, Certification, CertifyOptions};
 use super::reference_storms::PairedPeak;
-use super::strata::{Estimate, StratifiedPeaks};
+use super::strata::{Estimate, StormRows, StratifiedPeaks, pilot};
+use crate::error::Result;
 use crate::study::Order;
+use crate::uncertainty::rng_from_seed;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -73,6 +75,33 @@ pub struct CertifiedPoint {
 }
 
 impl PairedStrata {
+    /// The reference storms of a certified curve: one in `pilot_share` a pilot over the strata,
+    /// the rest by Neyman's allocation on the mismatch at the `targets` ([`Self::allocation`]),
+    /// drawn like the metamodel's storms from their own `seed`; `pairs_of(rows, first)` runs them
+    /// through both models.
+    pub fn draw(
+        draws: &StormRows,
+        metamodel: &StratifiedPeaks,
+        targets: &[f64],
+        certify: &CertifyOptions,
+        pilot_share: usize,
+        seed: u64,
+        mut pairs_of: impl FnMut(&[Vec<f64>], usize) -> Result<Vec<PairedPeak>>,
+    ) -> Result<Self> {
+        let mut rng = rng_from_seed(seed);
+        let storms = certify.reference_storms;
+        let pilot_counts = pilot(draws.strata, storms, pilot_share, "certify.reference_storms")?;
+        let (rows, _) = draws.rows(&pilot_counts, &mut rng)?;
+        let mut paired = PairedStrata::new(&pilot_counts, &pairs_of(&rows, 0)?, certify.order);
+        let budget = storms - rows.len();
+        if draws.strata.count() > 1 && budget > 0 {
+            let counts = paired.allocation(metamodel, targets, budget);
+            let (more, _) = draws.rows(&counts, &mut rng)?;
+            paired.add(&counts, &pairs_of(&more, rows.len())?);
+        }
+        Ok(paired)
+    }
+
     /// `pairs` in the order of the strata, `counts[s]` of them in stratum s.
     pub fn new(counts: &[usize], pairs: &[PairedPeak], order: Order) -> Self {
         let mut paired = PairedStrata { strata: vec![Vec::new(); counts.len()], order, errors: Vec::new() };

@@ -8,14 +8,13 @@ use super::climate::{annual_probability_of_period, period_of_annual_probability}
 use super::exceedance::{automatic_thresholds, check_confidence};
 use super::reference_storms::{PairedPeak, paired_peaks_at, reference_storm_seed};
 use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, name_diverged, peaks_at};
-use super::strata::{Estimate, Sampling, StratifiedPeaks, WindStrata};
+use super::strata::{Estimate, Sampling, StormRows, StratifiedPeaks, WindStrata, pilot};
 use super::{Response, check_thresholds};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
 use crate::surrogate::Metamodel;
-use crate::uncertainty::{InputModel, Marginal, Rng, monte_carlo, rng_from_seed};
-use crate::wind::WindLoads;
+use crate::uncertainty::{InputModel, Marginal, rng_from_seed};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -246,27 +245,33 @@ pub fn hazard_curve(
     let mut sample = StratifiedPeaks::new(&strata, &pilot_counts, &peaks, &outside);
     let budget = options.samples - pilot_counts.iter().sum::<usize>();
     if strata.count() > 1 && budget > 0 {
-        let counts =
-            strata.neyman(&sample, &targets(&sample, options, |x| sample.exceedance(x, options.confidence)), budget);
+        let counts = strata.neyman(&sample, &targets(&sample, options), budget);
         let (peaks, outside) = stage(&counts)?;
         sample.add(&counts, &peaks, &outside);
     }
     let paired = match &options.certify {
-        Some(certify) => Some(reference_storms(&draws, &sample, options, certify, pairs_of)?),
+        Some(certify) => {
+            let seed = reference_storm_seed(options.seed);
+            let targets = targets(&sample, options);
+            Some(PairedStrata::draw(&draws, &sample, &targets, certify, REFERENCE_PILOT_SHARE, seed, pairs_of)?)
+        }
         None => None,
     };
     let confidence = options.confidence;
     let mut levels = sample.finite_peaks();
+    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&levels, 50));
     let certified = |x: f64| paired.as_ref().map(|paired| paired.exceedance(&sample, x, confidence));
     let estimate = |x: f64| certified(x).map_or_else(|| sample.exceedance(x, confidence), |point| point.estimate);
-    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&levels, 50));
     let estimates: Vec<Estimate> = thresholds.iter().map(|&x| estimate(x)).collect();
     let certification = paired.as_ref().map(|paired| {
         let points: Vec<CertifiedPoint> = thresholds.iter().filter_map(|&x| certified(x)).collect();
-        levels.extend(paired.finite_peaks());
-        levels.sort_by(f64::total_cmp);
         paired.certification(&points)
     });
+    // A certified curve's levels may lie beyond the metamodel's peaks, among the reference's.
+    if let Some(paired) = &paired {
+        levels.extend(paired.finite_peaks());
+        levels.sort_by(f64::total_cmp);
+    }
     let return_levels = options.return_periods.iter().map(|&t| return_level(&levels, t, estimate)).collect();
     let reliability = options.limit.map(|limit| reliability(limit, estimate(limit)));
     let climate = &options.climate;
@@ -294,74 +299,13 @@ pub fn hazard_curve(
     })
 }
 
-/// How an annual analysis draws its storms' inputs: every input from its law, the wind speed
-/// from the climate within each stratum.
-struct StormRows<'a> {
-    inputs: &'a InputModel,
-    wind: usize,
-    climate: &'a Marginal,
-    strata: &'a WindStrata,
-}
-
-impl StormRows<'_> {
-    /// `counts[s]` rows in each stratum s in turn, and their speeds.
-    fn rows(&self, counts: &[usize], rng: &mut Rng) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
-        let speeds = self.strata.speeds(self.climate, counts, rng);
-        if let Some(&v) = speeds.iter().find(|v| WindLoads::check_speed(**v).is_err()) {
-            return Err(Error::invalid("climate", format!("puts weight on a speed the wind model refuses ({v} m/s)")));
-        }
-        let mut rows = monte_carlo(self.inputs, speeds.len(), rng);
-        for (row, &v) in rows.iter_mut().zip(&speeds) {
-            row[self.wind] = v;
-        }
-        Ok((rows, speeds))
-    }
-}
-
-/// A pilot's storms per stratum: all of `storms` for one stratum, else one in `share` shared
-/// equally, at least two per stratum (errs naming `field` below that).
-fn pilot(strata: &WindStrata, storms: usize, share: usize, field: &str) -> Result<Vec<usize>> {
-    let share = if strata.count() == 1 { 1 } else { share };
-    let counts = vec![storms / share / strata.count(); strata.count()];
-    if counts[0] < 2 {
-        return Err(Error::invalid(
-            field,
-            format!("must be at least {} for the {} strata", 2 * share * strata.count(), strata.count()),
-        ));
-    }
-    Ok(counts)
-}
-
-/// The levels an allocation aims at: the return levels asked for, the 10-year one and the
-/// limit's, read off `estimate`.
-fn targets(sample: &StratifiedPeaks, options: &HazardOptions, estimate: impl Fn(f64) -> Estimate) -> Vec<f64> {
+/// The levels an allocation aims at: the metamodel's return levels asked for, its 10-year one
+/// and the limit.
+fn targets(sample: &StratifiedPeaks, options: &HazardOptions) -> Vec<f64> {
     let all = sample.finite_peaks();
+    let estimate = |x: f64| sample.exceedance(x, options.confidence);
     let periods = options.return_periods.iter().chain(std::iter::once(&ALWAYS_TARGETED_PERIOD));
-    periods.filter_map(|&t| return_level(&all, t, &estimate).value).chain(options.limit).collect()
-}
-
-/// The reference storms of a certified curve: a pilot, then Neyman's allocation on the mismatch
-/// ([`PairedStrata::allocation`]), drawn like the metamodel's storms from their own seed.
-fn reference_storms(
-    draws: &StormRows,
-    sample: &StratifiedPeaks,
-    options: &HazardOptions,
-    certify: &CertifyOptions,
-    mut pairs_of: impl FnMut(&[Vec<f64>], usize) -> Result<Vec<PairedPeak>>,
-) -> Result<PairedStrata> {
-    let mut rng = rng_from_seed(reference_storm_seed(options.seed));
-    let storms = certify.reference_storms;
-    let pilot_counts = pilot(draws.strata, storms, REFERENCE_PILOT_SHARE, "certify.reference_storms")?;
-    let (rows, _) = draws.rows(&pilot_counts, &mut rng)?;
-    let mut paired = PairedStrata::new(&pilot_counts, &pairs_of(&rows, 0)?, certify.order);
-    let budget = storms - rows.len();
-    if draws.strata.count() > 1 && budget > 0 {
-        let counts =
-            paired.allocation(sample, &targets(sample, options, |x| sample.exceedance(x, options.confidence)), budget);
-        let (more, _) = draws.rows(&counts, &mut rng)?;
-        paired.add(&counts, &pairs_of(&more, rows.len())?);
-    }
-    Ok(paired)
+    periods.filter_map(|&t| return_level(&all, t, estimate).value).chain(options.limit).collect()
 }
 
 /// The return level of period T: the first of the ascending `levels` where the estimate falls to

@@ -14,7 +14,9 @@
 //! With one stratum [1, 0] this is plain Monte Carlo, and the band is Clopper-Pearson's.
 
 use super::exceedance::clopper_pearson;
-use crate::uncertainty::{Marginal, Rng};
+use crate::error::{Error, Result};
+use crate::uncertainty::{InputModel, Marginal, Rng, monte_carlo};
+use crate::wind::WindLoads;
 use rand::RngExt;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
@@ -106,6 +108,44 @@ impl WindStrata {
         let sum: f64 = scores.iter().sum();
         scores.iter().map(|a| (budget as f64 * a / sum).floor() as usize).collect()
     }
+}
+
+/// How an annual analysis draws its storms' inputs: every input from its law, the wind speed
+/// from the climate within each stratum.
+pub struct StormRows<'a> {
+    pub inputs: &'a InputModel,
+    pub wind: usize,
+    pub climate: &'a Marginal,
+    pub strata: &'a WindStrata,
+}
+
+impl StormRows<'_> {
+    /// `counts[s]` rows in each stratum s in turn, and their speeds.
+    pub fn rows(&self, counts: &[usize], rng: &mut Rng) -> Result<(Vec<Vec<f64>>, Vec<f64>)> {
+        let speeds = self.strata.speeds(self.climate, counts, rng);
+        if let Some(&v) = speeds.iter().find(|v| WindLoads::check_speed(**v).is_err()) {
+            return Err(Error::invalid("climate", format!("puts weight on a speed the wind model refuses ({v} m/s)")));
+        }
+        let mut rows = monte_carlo(self.inputs, speeds.len(), rng);
+        for (row, &v) in rows.iter_mut().zip(&speeds) {
+            row[self.wind] = v;
+        }
+        Ok((rows, speeds))
+    }
+}
+
+/// A pilot's storms per stratum: all of `storms` for one stratum, else one in `share` shared
+/// equally, at least two per stratum (errs naming `field` below that).
+pub fn pilot(strata: &WindStrata, storms: usize, share: usize, field: &str) -> Result<Vec<usize>> {
+    let share = if strata.count() == 1 { 1 } else { share };
+    let counts = vec![storms / share / strata.count(); strata.count()];
+    if counts[0] < 2 {
+        return Err(Error::invalid(
+            field,
+            format!("must be at least {} for the {} strata", 2 * share * strata.count(), strata.count()),
+        ));
+    }
+    Ok(counts)
 }
 
 /// An estimated probability with its error.
