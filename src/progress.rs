@@ -28,6 +28,11 @@ pub enum Progress {
         done: usize,
         total: usize,
     },
+    /// A certified answer's storms through both the reference model and the metamodel done.
+    ReferenceStorms {
+        done: usize,
+        total: usize,
+    },
 }
 
 /// Who watches long work: progress reports, and whether it should stop (cheap enough to ask every

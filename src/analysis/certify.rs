@@ -17,12 +17,12 @@
 use super::Response;
 use super::exceedance::{ExceedanceCurve, clopper_pearson, exceedance_curve};
 use super::plot::exceedance_svg;
-use super::reference_storms::{PairedPeak, paired_peaks, reference_storm_seed};
+use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
 use crate::surrogate::Metamodel;
-use crate::uncertainty::InputModel;
+use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -52,7 +52,7 @@ fn reduced() -> Order {
 
 /// The exceedance curve of `metamodel_peaks` (the metamodel's own storms, drawn with `seed`) at
 /// `thresholds`: plain, or certified when `certify` asks, its reference storms drawn from `inputs`
-/// with a seed apart from the metamodel's, and what they did.
+/// with a seed apart from the metamodel's and run by `runner`, and what they did.
 #[allow(clippy::too_many_arguments)]
 pub fn certify_exceedance(
     metamodel: &Metamodel,
@@ -64,6 +64,7 @@ pub fn certify_exceedance(
     seed: u64,
     response: Response,
     confidence: f64,
+    runner: &dyn ReferenceRunner,
     observer: &dyn Observer,
 ) -> Result<(ExceedanceCurve, Option<Certification>)> {
     let Some(options) = certify else {
@@ -71,8 +72,10 @@ pub fn certify_exceedance(
     };
     check_reference_storms(options.reference_storms, metamodel_peaks.len(), "certify.reference_storms")?;
     let storms = options.reference_storms;
-    let paired =
-        paired_peaks(metamodel, study, inputs, storms, reference_storm_seed(seed), response, options.order, observer)?;
+    let runs = PairedRuns { metamodel, study, seed: reference_storm_seed(seed), response, order: options.order };
+    let rows = monte_carlo(inputs, storms, &mut rng_from_seed(runs.seed));
+    let streams: Vec<usize> = (0..storms).collect();
+    let paired = runner.pairs(&runs, &rows, &streams, observer)?;
     let CertifiedCurve { curve, certification, .. } =
         certified_curve(metamodel_peaks, &paired, thresholds, options.order, confidence);
     Ok((curve, Some(certification)))

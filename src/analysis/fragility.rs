@@ -7,7 +7,7 @@ use super::certify::{
 };
 use super::exceedance::{check_confidence, clopper_pearson};
 use super::hazard::WIND_SPEED;
-use super::reference_storms::{PairedPeak, paired_peaks_at, reference_storm_seed};
+use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
 use super::sampling::{DivergedStorm, check_samples, name_diverged};
 use super::{Draws, OnDivergence, Response, check_thresholds, peaks_at};
 use crate::error::{Error, Result};
@@ -322,6 +322,7 @@ pub fn metamodel_fragility(
     study: &Study,
     response: Response,
     options: &FragilityOptions,
+    runner: &dyn ReferenceRunner,
     observer: &dyn Observer,
 ) -> Result<Fragility> {
     response.check(&study.structure)?;
@@ -330,12 +331,9 @@ pub fn metamodel_fragility(
         let draws = Draws { study, rows, storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
         peaks_at(metamodel, &draws, response, observer)
     };
-    let paired_of = |rows: &[Vec<f64>], storms: &[usize]| {
-        let seed = reference_storm_seed(options.seed);
-        let draws = Draws { study, rows, storms, seed, on_divergence: OnDivergence::Exceed };
-        let order = options.certify.map_or(Order::Reduced, |c| c.order);
-        paired_peaks_at(metamodel, &draws, response, order, observer)
-    };
+    let order = options.certify.map_or(Order::Reduced, |c| c.order);
+    let runs = PairedRuns { metamodel, study, seed: reference_storm_seed(options.seed), response, order };
+    let paired_of = |rows: &[Vec<f64>], storms: &[usize]| runner.pairs(&runs, rows, storms, observer);
     fragility(&study.inputs, options, calibrated, peaks_of, paired_of)
 }
 

@@ -6,7 +6,7 @@ use super::certified_hazard::{CertifiedPoint, HazardCertification, PairedStrata}
 use super::certify::{CertifyOptions, check_reference_storms};
 use super::climate::{annual_probability_of_period, period_of_annual_probability};
 use super::exceedance::{automatic_thresholds, check_confidence};
-use super::reference_storms::{PairedPeak, paired_peaks_at, reference_storm_seed};
+use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
 use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, name_diverged, peaks_at};
 use super::strata::{Estimate, Sampling, StormRows, StratifiedPeaks, WindStrata, pilot};
 use super::{Response, check_thresholds};
@@ -348,6 +348,7 @@ pub fn metamodel_hazard(
     study: &Study,
     response: Response,
     options: &HazardOptions,
+    runner: &dyn ReferenceRunner,
     observer: &dyn Observer,
 ) -> Result<HazardCurve> {
     response.check(&study.structure)?;
@@ -357,12 +358,11 @@ pub fn metamodel_hazard(
         let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
         peaks_at(metamodel, &draws, response, observer)
     };
+    let order = options.certify.map_or(Order::Reduced, |c| c.order);
+    let runs = PairedRuns { metamodel, study, seed: reference_storm_seed(options.seed), response, order };
     let pairs_of = |rows: &[Vec<f64>], first: usize| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
-        let seed = reference_storm_seed(options.seed);
-        let draws = Draws { study, rows, storms: &storms, seed, on_divergence: OnDivergence::Exceed };
-        let order = options.certify.map_or(Order::Reduced, |c| c.order);
-        paired_peaks_at(metamodel, &draws, response, order, observer)
+        runner.pairs(&runs, rows, &storms, observer)
     };
     hazard_curve(&study.inputs, options, calibrated, peaks_of, pairs_of)
 }

@@ -42,7 +42,9 @@ pub use peaks::{PeakSummary, pearson, quantile};
 pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validation_svg};
 pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
 pub use reference::{reference_history, reference_peak};
-pub use reference_storms::{PairedPeak, paired_peaks, paired_peaks_at, reference_storm_seed};
+pub use reference_storms::{
+    OnThisMachine, PairedPeak, PairedRuns, ReferenceRunner, paired_peaks, paired_peaks_at, reference_storm_seed,
+};
 pub use response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_GRAVITY};
 pub use sampling::{
     DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, check_samples, describe_diverged, metamodel_peaks, peaks_at,

@@ -44,6 +44,56 @@ pub fn paired_peaks(
     paired_peaks_at(metamodel, &draws, response, order, observer)
 }
 
+/// What fixes a certified answer's storms through both models, apart from their rows: the models,
+/// the seed of their winds, the response read and the reference's order.
+#[derive(Clone, Copy)]
+pub struct PairedRuns<'a> {
+    pub metamodel: &'a Metamodel,
+    pub study: &'a Study,
+    /// The reference storms' seed ([`reference_storm_seed`] of the request's).
+    pub seed: u64,
+    pub response: Response,
+    pub order: Order,
+}
+
+impl PairedRuns<'_> {
+    /// `rows` (row i's wind from stream `storms[i]` of the seed) through both models, here.
+    pub fn run(&self, rows: &[Vec<f64>], storms: &[usize], observer: &dyn Observer) -> Result<Vec<PairedPeak>> {
+        let draws = Draws { study: self.study, rows, storms, seed: self.seed, on_divergence: OnDivergence::Exceed };
+        paired_peaks_at(self.metamodel, &draws, self.response, self.order, observer)
+    }
+}
+
+/// Where a certified answer's reference storms run. They are its cost (a reference integration
+/// each), so the service spreads them over every replica's workers; the command line runs them
+/// on this machine's cores ([`OnThisMachine`]).
+pub trait ReferenceRunner {
+    /// `rows` (row i's wind from stream `storms[i]` of `runs.seed`) through both models of `runs`,
+    /// in the order of the rows.
+    fn pairs(
+        &self,
+        runs: &PairedRuns,
+        rows: &[Vec<f64>],
+        storms: &[usize],
+        observer: &dyn Observer,
+    ) -> Result<Vec<PairedPeak>>;
+}
+
+/// Reference storms on this machine's cores, in parallel.
+pub struct OnThisMachine;
+
+impl ReferenceRunner for OnThisMachine {
+    fn pairs(
+        &self,
+        runs: &PairedRuns,
+        rows: &[Vec<f64>],
+        storms: &[usize],
+        observer: &dyn Observer,
+    ) -> Result<Vec<PairedPeak>> {
+        runs.run(rows, storms, observer)
+    }
+}
+
 /// The rows of `draws` (row i's wind from stream `draws.storms[i]` of `draws.seed`) through the
 /// reference model of `order` and the metamodel, and the peak of `response` in each. A full-order
 /// storm is the floor field, and the metamodel sees its projection on the modes; a reduced-order
@@ -72,7 +122,7 @@ pub fn paired_peaks_at(
                 reference: reference_peak(study, x, &run, response)?,
                 metamodel: metamodel_peak(metamodel, study, x, &run, response)?,
             };
-            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
+            observer.progress(Progress::ReferenceStorms { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
             Ok(pair)
         })
         .collect()

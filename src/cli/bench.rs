@@ -6,7 +6,7 @@
 //! `benches/`, never asserted in a test.
 
 use crate::analysis::{
-    HazardOptions, Response, ResponseKind, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve,
+    HazardOptions, OnThisMachine, Response, ResponseKind, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve,
     metamodel_hazard, metamodel_peaks, metamodel_profiles, metamodel_sensitivity,
 };
 use crate::dynamics::{integrate_full, integrate_reduced};
@@ -166,7 +166,8 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         sampling: Sampling::Stratified,
         certify: None,
     };
-    let hazard_seconds = time(repetitions.min(3), |_| metamodel_hazard(&metamodel, &study, roof, &hazard, &Silent))?;
+    let hazard_seconds =
+        time(repetitions.min(3), |_| metamodel_hazard(&metamodel, &study, roof, &hazard, &OnThisMachine, &Silent))?;
     rows.push(row(
         format!(
             "hazard curve, {} storms, {} return periods (all threads)",

@@ -4,8 +4,8 @@ use super::args::{CertifyArgs, ResponseArgs, SamplingArgs, out_format, write_out
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    STANDARD_GRAVITY, automatic_thresholds, certify_exceedance, check_confidence, check_reference_storms,
-    exceedance_csv, exceedance_figure, metamodel_peaks,
+    OnThisMachine, STANDARD_GRAVITY, automatic_thresholds, certify_exceedance, check_confidence,
+    check_reference_storms, exceedance_csv, exceedance_figure, metamodel_peaks,
 };
 use crate::error::{Error, Result};
 use clap::Args;
@@ -64,6 +64,7 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
         seed,
         response,
         confidence,
+        &OnThisMachine,
         &counter,
     )?;
     let seconds = started.elapsed().as_secs_f64();

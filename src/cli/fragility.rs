@@ -3,7 +3,9 @@
 use super::args::{AnalysisArgs, CertifyArgs, ResponseArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
-use crate::analysis::{Fragility, FragilityOptions, MAX_WIND_SPEEDS, fragility_svg, metamodel_fragility};
+use crate::analysis::{
+    Fragility, FragilityOptions, MAX_WIND_SPEEDS, OnThisMachine, fragility_svg, metamodel_fragility,
+};
 use crate::error::{Error, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -68,7 +70,7 @@ pub fn fragility(args: &FragilityArgs) -> Result<String> {
     };
     let response = args.response.response(&study)?;
     let started = Instant::now();
-    let result = metamodel_fragility(&metamodel, &study, response, &options, &Counter(started))?;
+    let result = metamodel_fragility(&metamodel, &study, response, &options, &OnThisMachine, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = response.per_storm();
     let out = args.out.as_deref().zip(format);

@@ -5,7 +5,8 @@ use super::args::{AnalysisArgs, CertifyArgs, ResponseArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    ClimateSpec, DEFAULT_RETURN_PERIODS, HazardCurve, HazardOptions, Sampling, WIND_SPEED, hazard_svg, metamodel_hazard,
+    ClimateSpec, DEFAULT_RETURN_PERIODS, HazardCurve, HazardOptions, OnThisMachine, Sampling, WIND_SPEED, hazard_svg,
+    metamodel_hazard,
 };
 use crate::error::{Error, Result};
 use clap::{Args, ValueEnum};
@@ -78,7 +79,7 @@ pub fn hazard(args: &HazardArgs) -> Result<String> {
     };
     let response = args.response.response(&study)?;
     let started = Instant::now();
-    let curve = metamodel_hazard(&metamodel, &study, response, &options, &Counter(started))?;
+    let curve = metamodel_hazard(&metamodel, &study, response, &options, &OnThisMachine, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = response.per_storm();
     let out = args.out.as_deref().zip(format);

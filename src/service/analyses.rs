@@ -8,8 +8,8 @@ use super::rendering::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
     CertifyOptions, ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions,
-    Response, ResponseKind, ResponseName, Sampling, Sensitivity, WIND_SPEED, check_confidence, fragility_svg,
-    hazard_svg, metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
+    ReferenceRunner, Response, ResponseKind, ResponseName, Sampling, Sensitivity, WIND_SPEED, check_confidence,
+    fragility_svg, hazard_svg, metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
 };
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -314,12 +314,14 @@ impl AnalysisRequest {
         }
     }
 
-    /// Samples the metamodel and answers (blocking; parallel over storms).
+    /// Samples the metamodel and answers (blocking; parallel over storms); a certified answer's
+    /// reference storms run where `reference` puts them.
     pub fn answer(
         &self,
         metamodel: &Metamodel,
         study: &Study,
         metamodel_id: &str,
+        reference: &dyn ReferenceRunner,
         observer: &dyn Observer,
     ) -> Result<AnalysisAnswer> {
         let metamodel_id = metamodel_id.to_string();
@@ -327,11 +329,11 @@ impl AnalysisRequest {
         Ok(match self {
             AnalysisRequest::Hazard(r) => {
                 let options = r.options(study)?;
-                let curve = metamodel_hazard(metamodel, study, response, &options, observer)?;
+                let curve = metamodel_hazard(metamodel, study, response, &options, reference, observer)?;
                 AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response, metamodel_id }))
             }
             AnalysisRequest::Fragility(r) => {
-                let fragility = metamodel_fragility(metamodel, study, response, &r.options()?, observer)?;
+                let fragility = metamodel_fragility(metamodel, study, response, &r.options()?, reference, observer)?;
                 AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response, metamodel_id }))
             }
             AnalysisRequest::Sensitivity(r) => {

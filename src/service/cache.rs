@@ -1,6 +1,10 @@
 //! The metamodels read back from the store, kept loaded for the sampling requests that follow,
 //! with a bound on how many.
 
+use super::AppState;
+use super::supervision::{blocking, through_faults};
+use crate::error::{Error, Result};
+use crate::progress::Observer;
 use crate::study::Study;
 use crate::surrogate::Metamodel;
 use lru::LruCache;
@@ -51,6 +55,31 @@ impl<V: Clone> LoadedMetamodels<V> {
         self.entries.pop(id);
         self.generation += 1;
     }
+}
+
+/// A stored metamodel and its study for a job or a task, from this replica's cache or read and
+/// cached; an error naming `metamodel_id` when it was deleted.
+pub(super) async fn stored_metamodel(state: &AppState, id: &str, supervision: &dyn Observer) -> Result<Loaded> {
+    let (cached, generation) = {
+        let mut loaded = state.loaded.lock().expect("cache lock");
+        (loaded.get(id), loaded.generation())
+    };
+    if let Some(found) = cached {
+        return Ok(found);
+    }
+    let body = through_faults(supervision, "reading a metamodel", || state.store.metamodel_body(id))
+        .await?
+        .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
+    let loaded = Arc::new(
+        blocking(move || {
+            let metamodel = Metamodel::from_json(&body)?;
+            let study = metamodel.study()?;
+            Ok((metamodel, study))
+        })
+        .await?,
+    );
+    state.loaded.lock().expect("cache lock").insert(id, loaded.clone(), generation);
+    Ok(loaded)
 }
 
 #[cfg(test)]

@@ -8,9 +8,9 @@ use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::ExceedanceCurve;
 use crate::analysis::exceedance_figure;
 use crate::analysis::{
-    Certification, CertifyOptions, PeakProfile, Response, ResponseKind, ResponseName, automatic_thresholds,
-    certify_exceedance, check_confidence, check_quantile, check_reference_storms, check_thresholds, exceedance_csv,
-    metamodel_peaks, metamodel_profiles,
+    Certification, CertifyOptions, PeakProfile, ReferenceRunner, Response, ResponseKind, ResponseName,
+    automatic_thresholds, certify_exceedance, check_confidence, check_quantile, check_reference_storms,
+    check_thresholds, exceedance_csv, metamodel_peaks, metamodel_profiles,
 };
 use crate::error::{Error, Result, require_finite};
 use crate::progress::Observer;
@@ -119,12 +119,14 @@ impl ExceedanceRequest {
         held_inputs(study, &self.fixed).map(drop)
     }
 
-    /// Samples the metamodel and builds the curve (blocking; parallel over samples).
+    /// Samples the metamodel and builds the curve (blocking; parallel over samples); a certified
+    /// curve's reference storms run where `reference` puts them.
     pub fn answer(
         &self,
         metamodel: &Metamodel,
         study: &Study,
         metamodel_id: &str,
+        reference: &dyn ReferenceRunner,
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
         let response = self.response.located(self.floor, self.group, &study.structure)?;
@@ -158,6 +160,7 @@ impl ExceedanceRequest {
             seed,
             response,
             confidence,
+            reference,
             observer,
         )?;
         let metamodel_id = metamodel_id.to_string();

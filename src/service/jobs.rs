@@ -9,50 +9,25 @@
 //! new jobs. Validations and exceedance requests run whole on the worker that claimed them.
 
 use super::analyses::AnalysisJob;
+use super::cache::stored_metamodel;
 use super::exceedance::{ExceedanceJob, held_inputs};
 use super::lease::LeaseKeeper;
-use super::store::{Store, TaskRow};
+use super::store::Store;
+use super::supervision::{Supervision, blocking, through_faults};
+use super::tasks::{EXPERIMENTS_PER_TASK, Experiments, ReferenceTasks, TaskRequest, run_task, work_through_tasks};
 use super::{AppState, CalibrationRequest, ValidationJob};
 use crate::analysis::validate;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, Silent};
 use crate::study::Study;
-use crate::surrogate::phases::{CalibrationPlan, ExperimentFit, assemble, fit_experiments, plan};
+use crate::surrogate::phases::{ExperimentFit, assemble, plan};
 use crate::surrogate::{CalibrationOptions, Metamodel, StageSeconds};
-use serde::{Deserialize, Serialize};
 use std::future::Future;
 use std::pin::Pin;
-use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
+use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::{Duration, Instant};
 use tracing::Instrument;
-
-/// Experiments per task: large enough that a task's overhead (rebuilding the study, a lease) is
-/// small against its work, small enough that a full-size calibration has tasks for every replica.
-const EXPERIMENTS_PER_TASK: usize = 10;
-
-/// What the blocking work and its async supervisor share: the work reports progress here and
-/// reads whether to stop.
-#[derive(Default)]
-struct Supervision {
-    /// Latest progress, saved at the next heartbeat.
-    progress: Mutex<Option<Progress>>,
-    /// Set by the supervisor on a cancel request, a shutdown or a lease in doubt; read by the work
-    /// between steps.
-    cancel: AtomicBool,
-    /// Whether a client asked for the cancellation. Only then is the job recorded as cancelled: a
-    /// shutdown or a lease in doubt gives the job back to the queue for another worker.
-    requested: AtomicBool,
-}
-
-impl Observer for Supervision {
-    fn progress(&self, progress: Progress) {
-        *self.progress.lock().expect("progress lock") = Some(progress);
-    }
-    fn cancelled(&self) -> bool {
-        self.cancel.load(Ordering::Relaxed)
-    }
-}
 
 /// Runs `count` workers until shutdown.
 pub fn spawn_workers(state: AppState, count: usize) -> Vec<tokio::task::JoinHandle<()>> {
@@ -101,78 +76,6 @@ async fn worker(state: AppState) {
     }
 }
 
-/// A chunk of a calibration's experiments, as queued.
-#[derive(Debug, Serialize, Deserialize)]
-struct TaskRequest {
-    calibration: CalibrationRequest,
-    plan: CalibrationPlan,
-    experiments: Vec<usize>,
-}
-
-/// Runs a task with its own lease; `parent` is the coordinating job's cancel flag when the
-/// coordinator runs it itself.
-async fn run_task(state: &AppState, owner: &str, task: TaskRow, parent: Option<&Supervision>) {
-    let store = &state.store;
-    let (job_id, chunk) = (task.job_id.clone(), task.chunk);
-    let supervision = Arc::new(Supervision::default());
-    let observer = supervision.clone();
-    let config = state.config.clone();
-    let span = tracing::Span::current();
-    let mut work = tokio::task::spawn_blocking(move || -> Result<Vec<ExperimentFit>> {
-        let _in_task = span.enter();
-        let request: TaskRequest =
-            serde_json::from_str(&task.request).map_err(|e| Error::invalid("task", e.to_string()))?;
-        let (study, options) = request.calibration.resolve(&config)?;
-        fit_experiments(&study, &options, &request.plan, &request.experiments, 0, observer.as_ref())
-    });
-    let mut ticker = tokio::time::interval(Duration::from_secs(1));
-    let mut lease = LeaseKeeper::claimed(state.config.lease_ms);
-    let result = loop {
-        tokio::select! {
-            result = &mut work => break result,
-            _ = ticker.tick() => {
-                let mut stop = state.draining.load(Ordering::Relaxed) || parent.is_some_and(|p| p.cancelled());
-                if lease.due() {
-                    match store.heartbeat_task(&job_id, chunk, owner, state.config.lease_ms).await {
-                        Ok(Some(true)) => lease.renewed(),
-                        // The task was withdrawn (its job cancelled) or taken by another worker.
-                        Ok(_) => stop = true,
-                        Err(error) => {
-                            tracing::warn!(%error, "renewing a task's lease failed");
-                            stop |= !lease.failed();
-                        }
-                    }
-                }
-                if stop {
-                    supervision.cancel.store(true, Ordering::Relaxed);
-                }
-            }
-        }
-    };
-    let (finished, text) = match result {
-        Ok(Ok(fits)) => (Some("done"), serde_json::to_string(&fits).expect("fits serialise")),
-        Ok(Err(Error::Cancelled)) => (None, String::new()),
-        Ok(Err(error)) => (Some("failed"), task_failure(&error)),
-        Err(panic) => (Some("failed"), task_failure(&Error::Internal(format!("the task panicked: {panic}")))),
-    };
-    let recorded = match finished {
-        Some(outcome) => lease
-            .persist("a task's outcome", || store.finish_task(&job_id, chunk, owner, outcome, &text))
-            .await
-            .map(|_| ()),
-        None => lease.persist("releasing a task", || store.release_task(&job_id, chunk, owner)).await,
-    };
-    if let Err(error) = recorded {
-        tracing::error!(%error, "recording a task failed");
-    }
-}
-
-/// A failed task's error as its row keeps it: JSON, so that the coordinating job fails with the
-/// same kind of error (bad input, numerics, internal) wherever the task ran.
-fn task_failure(error: &Error) -> String {
-    serde_json::to_string(error).expect("errors serialise")
-}
-
 /// What a job produced.
 enum JobOutput {
     Metamodel(Box<Metamodel>),
@@ -181,29 +84,6 @@ enum JobOutput {
 }
 
 type WorkFuture = Pin<Box<dyn Future<Output = Result<(JobOutput, String)>> + Send>>;
-
-/// A blocking computation as a future, in the caller's span (its job); a panic becomes an error.
-async fn blocking<T: Send + 'static>(work: impl FnOnce() -> Result<T> + Send + 'static) -> Result<T> {
-    let span = tracing::Span::current();
-    tokio::task::spawn_blocking(move || span.in_scope(work))
-        .await
-        .map_err(|panic| Error::Internal(format!("the job panicked: {panic}")))?
-}
-
-/// A stored metamodel and its study, for jobs that sample it.
-async fn stored_metamodel(store: &Store, id: &str) -> Result<(Metamodel, Study)> {
-    let body = store
-        .metamodel_body(id)
-        .await
-        .map_err(|e| Error::Internal(format!("database: {e}")))?
-        .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
-    blocking(move || {
-        let metamodel = Metamodel::from_json(&body)?;
-        let study = metamodel.study()?;
-        Ok((metamodel, study))
-    })
-    .await
-}
 
 fn parse<T: serde::de::DeserializeOwned>(request: &str) -> Result<T> {
     serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))
@@ -229,49 +109,55 @@ async fn prepare(
         }
         "validation" => {
             let job: ValidationJob = parse(request)?;
-            let (metamodel, study) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            let loaded = stored_metamodel(state, &job.metamodel_id, supervision.as_ref()).await?;
             Ok(Box::pin(blocking(move || {
-                let inputs = held_inputs(&study, &job.fixed)?;
-                let report = validate(&metamodel, &study, &inputs, job.samples, job.seed, supervision.as_ref())?;
-                Ok((JobOutput::Answer(serde_json::to_string(&report).expect("a report serialises")), study.name))
+                let (metamodel, study) = (&loaded.0, &loaded.1);
+                let inputs = held_inputs(study, &job.fixed)?;
+                let report = validate(metamodel, study, &inputs, job.samples, job.seed, supervision.as_ref())?;
+                Ok((
+                    JobOutput::Answer(serde_json::to_string(&report).expect("a report serialises")),
+                    study.name.clone(),
+                ))
             })))
         }
         "exceedance" => {
             let job: ExceedanceJob = parse(request)?;
-            let (metamodel, study) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            let loaded = stored_metamodel(state, &job.metamodel_id, supervision.as_ref()).await?;
+            let reference = reference_tasks(state, id, owner, &job.metamodel_id);
             Ok(Box::pin(blocking(move || {
-                let answer = job.request.answer(&metamodel, &study, &job.metamodel_id, supervision.as_ref())?;
-                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("a curve serialises")), study.name))
+                let (metamodel, study) = (&loaded.0, &loaded.1);
+                let answer =
+                    job.request.answer(metamodel, study, &job.metamodel_id, &reference, supervision.as_ref())?;
+                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("a curve serialises")), study.name.clone()))
             })))
         }
         "hazard" | "fragility" | "sensitivity" => {
             let job: AnalysisJob = parse(request)?;
-            let (metamodel, study) = stored_metamodel(&state.store, &job.metamodel_id).await?;
+            let loaded = stored_metamodel(state, &job.metamodel_id, supervision.as_ref()).await?;
+            let reference = reference_tasks(state, id, owner, &job.metamodel_id);
             Ok(Box::pin(blocking(move || {
-                let answer = job.request.answer(&metamodel, &study, &job.metamodel_id, supervision.as_ref())?;
-                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")), study.name))
+                let (metamodel, study) = (&loaded.0, &loaded.1);
+                let answer =
+                    job.request.answer(metamodel, study, &job.metamodel_id, &reference, supervision.as_ref())?;
+                Ok((
+                    JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")),
+                    study.name.clone(),
+                ))
             })))
         }
         other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
     }
 }
 
-/// A database call of a running job, tried again every second through transient faults until it
-/// answers or the job is cancelled: the job's heartbeat cancels it when the lease is lost.
-async fn through_faults<T, F: Future<Output = std::result::Result<T, sqlx::Error>>>(
-    supervision: &Supervision,
-    what: &str,
-    mut call: impl FnMut() -> F,
-) -> Result<T> {
-    loop {
-        match call().await {
-            Ok(value) => return Ok(value),
-            Err(_) if supervision.cancelled() => return Err(Error::Cancelled),
-            Err(error) => {
-                tracing::warn!(%error, what, "a database call failed; trying again");
-                tokio::time::sleep(Duration::from_secs(1)).await;
-            }
-        }
+/// Where the job's certified answer runs its reference storms: as tasks of the job.
+fn reference_tasks(state: &AppState, id: &str, owner: &str, metamodel_id: &str) -> ReferenceTasks {
+    ReferenceTasks {
+        state: state.clone(),
+        job_id: id.to_string(),
+        owner: owner.to_string(),
+        metamodel_id: metamodel_id.to_string(),
+        runtime: tokio::runtime::Handle::current(),
+        next_chunk: AtomicI64::new(0),
     }
 }
 
@@ -296,47 +182,27 @@ async fn coordinate(
     let tasks: Vec<String> = remaining
         .chunks(EXPERIMENTS_PER_TASK)
         .map(|experiments| {
-            let task = TaskRequest {
+            let task = TaskRequest::Experiments(Box::new(Experiments {
                 calibration: request.clone(),
                 plan: planned.plan.clone(),
                 experiments: experiments.to_vec(),
-            };
+            }));
             serde_json::to_string(&task).expect("a task serialises")
         })
         .collect();
     let store = &state.store;
-    through_faults(&supervision, "queueing tasks", || store.insert_tasks(&id, &tasks)).await?;
+    through_faults(supervision.as_ref(), "queueing tasks", || store.insert_tasks(&id, 0, &tasks)).await?;
     state.wake.notify_waiters();
     let mut fits = {
         let (planned, options, supervision) = (planned.clone(), options.clone(), supervision.clone());
         blocking(move || planned.fit_selection(&options, supervision.as_ref())).await?
     };
-    let total = planned.plan.design.len();
-    loop {
-        if supervision.cancelled() {
-            return Err(Error::Cancelled);
-        }
-        let tally = through_faults(&supervision, "counting tasks", || store.task_tally(&id)).await?;
-        if let Some(failure) = tally.failure {
-            return Err(serde_json::from_str(&failure).unwrap_or(Error::Internal(failure)));
-        }
-        let done = fits.len() + (tally.done as usize * EXPERIMENTS_PER_TASK).min(remaining.len());
+    let (selection, total) = (fits.len(), planned.plan.design.len());
+    let done = |tasks: usize| {
+        let done = selection + (tasks * EXPERIMENTS_PER_TASK).min(remaining.len());
         supervision.progress(Progress::Experiments { done, total });
-        if tally.done == tally.total {
-            break;
-        }
-        let claimed = through_faults(&supervision, "claiming a task", || {
-            store.claim_task(&owner, state.config.lease_ms, Some(&id))
-        });
-        match claimed.await? {
-            Some(task) => {
-                let span = tracing::info_span!("task", chunk = task.chunk);
-                run_task(&state, &owner, task, Some(&supervision)).instrument(span).await
-            }
-            None => tokio::time::sleep(Duration::from_millis(250)).await,
-        }
-    }
-    for text in through_faults(&supervision, "reading task results", || store.task_results(&id)).await? {
+    };
+    for text in work_through_tasks(&state, &id, &owner, supervision.as_ref(), 0, done).await? {
         let chunk: Vec<ExperimentFit> =
             serde_json::from_str(&text).map_err(|e| Error::Internal(format!("a stored task result: {e}")))?;
         fits.extend(chunk);
@@ -373,20 +239,20 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
                             lease.renewed();
                             if cancel {
                                 supervision.requested.store(true, Ordering::Relaxed);
-                                supervision.cancel.store(true, Ordering::Relaxed);
+                                supervision.stop();
                             }
                         }
-                        Ok(None) => supervision.cancel.store(true, Ordering::Relaxed), // lease lost: stop, discard
+                        Ok(None) => supervision.stop(), // lease lost: stop, discard
                         Err(error) => {
                             tracing::warn!(%error, "renewing a job's lease failed");
                             if !lease.failed() {
-                                supervision.cancel.store(true, Ordering::Relaxed);
+                                supervision.stop();
                             }
                         }
                     }
                 }
                 if state.draining.load(Ordering::Relaxed) {
-                    supervision.cancel.store(true, Ordering::Relaxed);
+                    supervision.stop();
                 }
             }
         }

@@ -13,6 +13,8 @@ mod requests;
 mod routes;
 mod schema;
 mod store;
+mod supervision;
+mod tasks;
 mod watch;
 
 pub use config::{LogFormat, Role, ServeArgs};

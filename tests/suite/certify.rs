@@ -8,7 +8,8 @@ use crate::harness::fixture;
 use serde_json::{Value, json};
 use std::time::Duration;
 use windmeta::analysis::{
-    CertifyOptions, Draws, OnDivergence, Response, certify_exceedance, paired_peaks, peaks_at, reference_storm_seed,
+    CertifyOptions, Draws, OnDivergence, OnThisMachine, Response, certify_exceedance, paired_peaks, peaks_at,
+    reference_storm_seed,
 };
 use windmeta::progress::Silent;
 use windmeta::study::Order;
@@ -66,6 +67,7 @@ fn the_certified_curve_agrees_with_reference_monte_carlo() {
         seed,
         acceleration,
         0.95,
+        &OnThisMachine,
         &Silent,
     )
     .unwrap();

@@ -5,6 +5,7 @@ use super::ApiJson;
 use super::metamodels::load;
 use super::operations::OperationKind;
 use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
+use crate::analysis::OnThisMachine;
 use crate::service::AppState;
 use crate::service::analyses::{
     AnalysisAnswer, AnalysisJob, AnalysisRequest, FragilityRequest, HazardRequest, SensitivityRequest,
@@ -45,7 +46,8 @@ async fn analyse(
         }
     };
     let work: Work = Box::new(move |metamodel, study, observer, rendering| {
-        Ok(request.answer(metamodel, study, &id, observer)?.render(rendering))
+        // Certified requests are operations: here no reference storm runs.
+        Ok(request.answer(metamodel, study, &id, &OnThisMachine, observer)?.render(rendering))
     });
     answer_or_queue(&state, &headers, loaded, storms, queued, work).await
 }

@@ -2,6 +2,7 @@
 
 use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
+use crate::analysis::OnThisMachine;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
@@ -156,7 +157,8 @@ async fn exceedance_curve(
         }
     };
     let work: Work = Box::new(move |metamodel, study, observer, rendering| {
-        Ok(request.answer(metamodel, study, &id, observer)?.render(rendering))
+        // Certified requests are operations: here no reference storm runs.
+        Ok(request.answer(metamodel, study, &id, &OnThisMachine, observer)?.render(rendering))
     });
     answer_or_queue(&state, &headers, loaded, storms, queued, work).await
 }

@@ -1,5 +1,5 @@
 //! Tasks: pieces of a running job that any replica's idle worker may take (a calibration's
-//! experiments, in chunks), leased like jobs. A task is only handed out while its job runs and is
+//! experiments, a certified answer's reference storms, in chunks), leased like jobs. A task is only handed out while its job runs and is
 //! not being cancelled; a task abandoned `MAX_ATTEMPTS` times fails, and with it the job.
 
 use super::{Backend, MAX_ATTEMPTS, Store, now_ms};
@@ -23,19 +23,19 @@ pub struct TaskTally {
 }
 
 impl Store {
-    /// Queues a job's tasks. A chunk queued before by an earlier attempt at the job keeps its state
-    /// (and output, if done) when its request is the same, which a deterministic plan makes it;
-    /// otherwise it is queued afresh.
-    pub async fn insert_tasks(&self, job_id: &str, requests: &[String]) -> Result<(), sqlx::Error> {
+    /// Queues a job's tasks as chunks `first`, `first + 1`, …. A chunk queued before by an earlier
+    /// attempt at the job keeps its state (and output, if done) when its request is the same,
+    /// which a deterministic plan makes it; otherwise it is queued afresh.
+    pub async fn insert_tasks(&self, job_id: &str, first: i64, requests: &[String]) -> Result<(), sqlx::Error> {
         let mut tx = self.pool.begin().await?;
-        for (chunk, request) in requests.iter().enumerate() {
+        for (chunk, request) in (first..).zip(requests) {
             sqlx::query(
                 "INSERT INTO tasks (job_id, chunk, state, request) VALUES ($1, $2, 'queued', $3) \
                  ON CONFLICT (job_id, chunk) DO UPDATE SET request = excluded.request, state = 'queued', \
                  result = NULL, lease_owner = NULL, lease_until = NULL WHERE tasks.request <> excluded.request",
             )
             .bind(job_id)
-            .bind(chunk as i64)
+            .bind(chunk)
             .bind(request)
             .execute(&mut *tx)
             .await?;
@@ -173,12 +173,14 @@ impl Store {
         Ok(tally)
     }
 
-    /// The outputs of a job's done tasks, by chunk.
-    pub async fn task_results(&self, job_id: &str) -> Result<Vec<String>, sqlx::Error> {
-        let rows = sqlx::query("SELECT result FROM tasks WHERE job_id = $1 AND state = 'done' ORDER BY chunk")
-            .bind(job_id)
-            .fetch_all(&self.pool)
-            .await?;
+    /// The outputs of a job's done tasks from chunk `first` on, by chunk.
+    pub async fn task_results(&self, job_id: &str, first: i64) -> Result<Vec<String>, sqlx::Error> {
+        let rows =
+            sqlx::query("SELECT result FROM tasks WHERE job_id = $1 AND chunk >= $2 AND state = 'done' ORDER BY chunk")
+                .bind(job_id)
+                .bind(first)
+                .fetch_all(&self.pool)
+                .await?;
         rows.iter().map(|r| r.try_get("result")).collect()
     }
 }

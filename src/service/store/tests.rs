@@ -140,7 +140,7 @@ async fn tasks_of_a_running_job_are_shared_and_tallied() {
     for (name, store) in stores().await {
         queue(&store, "j").await;
         let requests = ["a".to_string(), "b".to_string()];
-        store.insert_tasks("j", &requests).await.unwrap();
+        store.insert_tasks("j", 0, &requests).await.unwrap();
         assert!(store.claim_task("w1", 60_000, None).await.unwrap().is_none(), "{name}: the job is not running");
         store.claim("coordinator", 60_000).await.unwrap().unwrap();
         let first = store.claim_task("w1", 60_000, None).await.unwrap().unwrap();
@@ -154,9 +154,9 @@ async fn tasks_of_a_running_job_are_shared_and_tallied() {
         assert!(store.finish_task("j", 1, "w2", "failed", "boom").await.unwrap(), "{name}");
         let tally = store.task_tally("j").await.unwrap();
         assert_eq!(tally, TaskTally { total: 2, done: 1, failure: Some("boom".into()) }, "{name}");
-        assert_eq!(store.task_results("j").await.unwrap(), vec!["r0".to_string()], "{name}");
+        assert_eq!(store.task_results("j", 0).await.unwrap(), vec!["r0".to_string()], "{name}");
         // A second attempt at the job: an unchanged chunk keeps its output, a changed one restarts.
-        store.insert_tasks("j", &["a".to_string(), "b2".to_string()]).await.unwrap();
+        store.insert_tasks("j", 0, &["a".to_string(), "b2".to_string()]).await.unwrap();
         assert_eq!(store.task_tally("j").await.unwrap(), TaskTally { total: 2, done: 1, failure: None });
         // Cancelling the job withdraws its tasks from idle workers and from the one running them.
         let again = store.claim_task("w1", 60_000, None).await.unwrap().unwrap();
