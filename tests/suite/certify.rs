@@ -8,8 +8,8 @@ use crate::harness::fixture;
 use serde_json::{Value, json};
 use std::time::Duration;
 use windmeta::analysis::{
-    CertifyOptions, Draws, OnDivergence, OnThisMachine, Response, certify_exceedance, paired_peaks, peaks_at,
-    reference_storm_seed,
+    CertifyOptions, Draws, OnDivergence, OnThisMachine, Response, certify_exceedance, metamodel_peaks, paired_peaks,
+    peaks_at, reference_storm_seed,
 };
 use windmeta::progress::Silent;
 use windmeta::study::Order;
@@ -126,6 +126,33 @@ async fn a_certified_request_is_an_operation_with_its_correction() {
         assert!((p - expected.clamp(0.0, 1.0)).abs() < 1e-12, "threshold {i}");
         assert!(number(&result["lower"][i]) <= p && p <= number(&result["upper"][i]), "threshold {i}");
     }
+    // Its reference storms ran as tasks (four of ten): the answer is the one this process computes.
+    let (metamodel, study) = fixture::metamodel();
+    let acceleration = Response::Acceleration { floor: study.structure.floors() };
+    let here = tokio::task::block_in_place(|| {
+        let peaks = metamodel_peaks(metamodel, study, &study.inputs, 200, 2, acceleration, &Silent).unwrap();
+        let thresholds: Vec<f64> = result["thresholds"].as_array().unwrap().iter().map(number).collect();
+        let certify = CertifyOptions { reference_storms: 40, order: Order::Reduced };
+        let inputs = &study.inputs;
+        let (curve, certification) = certify_exceedance(
+            metamodel,
+            study,
+            inputs,
+            &peaks,
+            &thresholds,
+            Some(&certify),
+            2,
+            acceleration,
+            0.95,
+            &OnThisMachine,
+            &Silent,
+        )
+        .unwrap();
+        (curve, certification.unwrap())
+    });
+    let served: Vec<f64> = result["probabilities"].as_array().unwrap().iter().map(number).collect();
+    let mismatches: Vec<f64> = certification["mismatch_rate"].as_array().unwrap().iter().map(number).collect();
+    assert_eq!((served, mismatches), (here.0.probabilities, here.1.mismatch_rate));
     // Refused before anything is queued, naming the field.
     for (wrong, field) in [
         (json!({"samples": 100, "certify": {"reference_storms": 101}}), "certify.reference_storms"),
@@ -194,4 +221,36 @@ async fn certified_hazard(app: &TestApp, id: &str) {
     let too_few = json!({"samples": 400, "return_periods": [10, 100], "certify": {"reference_storms": 10}});
     let (s, ct, body) = problem_details(app.post(&hazard, too_few).await).await;
     assert_problem(s, &ct, &body, 422, "certify.reference_storms");
+}
+
+/// A certified request's reference storms report their own progress, and a cancellation stops them
+/// within seconds (their tasks are withdrawn from every worker).
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_certified_request_reports_its_reference_storms_and_stops_when_cancelled() {
+    let app = spawn_app(&database("certify-cancel")).await;
+    // Full-length storms: 400 reference storms would take most of a minute on two cores.
+    let id = fixture::install(&app, 900.0).await;
+    let body = json!({"samples": 1000, "response": "acceleration", "certify": {"reference_storms": 400}});
+    let (status, queued) = app.post_json(&format!("/v1/metamodels/{id}/exceedance"), body).await;
+    assert_eq!(status, 202, "{queued}");
+    let op = queued["id"].as_str().unwrap();
+    let started = std::time::Instant::now();
+    loop {
+        let (_, now) = app.get(&format!("/v1/operations/{op}")).await;
+        let progress = &now["progress"];
+        if progress["stage"] == "reference_storms" && progress["done"].as_u64().unwrap() > 0 {
+            assert_eq!(progress["total"], 400, "{now}");
+            break;
+        }
+        assert!(started.elapsed() < Duration::from_secs(60), "no reference storm reported: {now}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    let asked = std::time::Instant::now();
+    let response = app.post(&format!("/v1/operations/{op}/cancel"), json!({})).await;
+    assert_eq!(response.status().as_u16(), 200);
+    let done = app.wait_for(op, &["cancelled", "failed", "succeeded"], Duration::from_secs(30)).await;
+    assert_eq!(done["state"], "cancelled", "{done}");
+    // A task stops within a second of its next heartbeat; well before the storms left would end.
+    assert!(asked.elapsed() < Duration::from_secs(10), "cancelled after {:?}", asked.elapsed());
+    app.stop().await;
 }

@@ -1,7 +1,9 @@
-//! Several `windmeta serve` processes on one PostgreSQL database: they share the job queue, a
+//! Several `windmeta serve` processes on one PostgreSQL database: they share the job queue and the
+//! tasks of one job (a calibration's experiments, a certified answer's reference storms), a
 //! replica killed in the middle of a job loses it to another that finishes it, and no job completes
 //! twice. Skipped, with the reason printed, where no PostgreSQL is reachable.
 
+use crate::harness::fixture;
 use crate::harness::postgres::fresh_postgres;
 use serde_json::{Value, json};
 use sqlx::Row;
@@ -187,4 +189,81 @@ async fn one_calibration_is_spread_over_replicas() {
     let mut expected = std::collections::BTreeSet::new();
     expected.extend([first.pid().to_string(), second.pid().to_string()]);
     assert_eq!(task_owners, expected, "both replicas ran experiments of the one calibration");
+}
+
+/// (chunk, state, attempts, lease owner's process id) of a job's tasks.
+async fn tasks_of(pool: &sqlx::AnyPool, job: &str) -> Vec<(i64, String, i64, Option<String>)> {
+    let rows = sqlx::query("SELECT chunk, state, attempts, lease_owner FROM tasks WHERE job_id = $1 ORDER BY chunk")
+        .bind(job)
+        .fetch_all(pool)
+        .await
+        .unwrap();
+    let owner = |r: &sqlx::any::AnyRow| r.get::<Option<String>, _>("lease_owner").map(|o| pid_of(&o));
+    rows.iter().map(|r| (r.get("chunk"), r.get("state"), r.get("attempts"), owner(r))).collect()
+}
+
+/// A certified curve's reference storms are shared by both replicas; the replica that runs the
+/// job is killed midway, and the other takes the job up, keeps the reference storms done before
+/// (not run again) and finishes the answer.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn reference_storms_are_shared_by_replicas_and_survive_a_killed_one() {
+    let Some(url) = fresh_postgres().await else { return };
+    let pool = sqlx::AnyPool::connect(&url).await.unwrap();
+    let mut replicas = vec![Replica::start(&url, "all"), Replica::start(&url, "all")];
+    // Full-length storms: a reference storm takes a quarter of a second of one core.
+    let metamodel = fixture::install_at(&url, 900.0).await;
+    let client = reqwest::Client::new();
+    let body = json!({"samples": 400, "seed": 5, "response": "acceleration", "certify": {"reference_storms": 120}});
+    let path = format!("{}/v1/metamodels/{metamodel}/exceedance", replicas[0].address);
+    let r = client.post(path).json(&body).send().await.unwrap();
+    assert_eq!(r.status().as_u16(), 202);
+    let id = r.json::<Value>().await.unwrap()["id"].as_str().unwrap().to_string();
+
+    // Until both replicas have run reference storms and some are done.
+    let mut task_owners = std::collections::BTreeSet::new();
+    let started = Instant::now();
+    let (coordinator, done_before) = loop {
+        let tasks = tasks_of(&pool, &id).await;
+        task_owners.extend(tasks.iter().filter(|t| t.1 == "running").filter_map(|t| t.3.clone()));
+        let done: Vec<(i64, i64)> = tasks.iter().filter(|t| t.1 == "done").map(|t| (t.0, t.2)).collect();
+        let job = running(&pool).await.into_iter().find(|(job, _)| *job == id);
+        if let Some((_, owner)) = job
+            && task_owners.len() == 2
+            && done.len() >= 2
+            && done.len() + 3 < tasks.len()
+        {
+            break (pid_of(&owner), done);
+        }
+        assert!(started.elapsed() < Duration::from_secs(120), "the tasks were never shared: {tasks:?}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    };
+    let mut expected = std::collections::BTreeSet::new();
+    expected.extend(replicas.iter().map(|r| r.pid().to_string()));
+    assert_eq!(task_owners, expected, "both replicas ran reference storms of the one answer");
+
+    // Kill the job's replica: the survivor finishes its tasks and takes the job up.
+    let killed = replicas.iter().position(|r| r.pid().to_string() == coordinator).unwrap();
+    drop(replicas.remove(killed));
+    let survivor = &replicas[0];
+    let started = Instant::now();
+    let op = loop {
+        for (chunk, attempts) in &done_before {
+            let now = tasks_of(&pool, &id).await.into_iter().find(|t| t.0 == *chunk);
+            if let Some((_, state, again, _)) = now {
+                assert_eq!((state.as_str(), again), ("done", *attempts), "chunk {chunk} was run again");
+            }
+        }
+        let op = operation(&client, survivor, &id).await;
+        if op["done"] == true {
+            break op;
+        }
+        assert!(started.elapsed() < Duration::from_secs(300), "stuck: {op}");
+        tokio::time::sleep(Duration::from_millis(100)).await;
+    };
+    assert_eq!(op["state"], "succeeded", "{op}");
+    assert_eq!(op["attempts"], 2, "taken up again once: {op}");
+    let certification = &op["result"]["certification"];
+    assert_eq!(certification["reference_storms"], 120, "{op}");
+    let probabilities = op["result"]["probabilities"].as_array().unwrap();
+    assert_eq!(certification["correction"].as_array().unwrap().len(), probabilities.len());
 }

@@ -7,6 +7,7 @@ function describeProgress(progress) {
   if (!progress) return '';
   if (progress.stage === 'experiments') return `reference runs ${progress.done} of ${progress.total}`;
   if (progress.stage === 'samples') return `storms ${progress.done} of ${progress.total}`;
+  if (progress.stage === 'reference_storms') return `reference storms ${progress.done} of ${progress.total}`;
   if (progress.stage === 'structure') return `mode ${progress.mode}: choosing the NARX terms`;
   if (progress.stage === 'expansion') return `mode ${progress.mode}: fitting the expansions`;
   return progress.stage;

@@ -27,12 +27,17 @@ pub fn metamodel() -> &'static (Metamodel, Study) {
 /// storms it samples (the NARX models do not depend on it): 900 s makes sampling take the paper's
 /// time per storm.
 pub async fn install(app: &TestApp, storm_s: f64) -> String {
+    install_at(&app.config.database_url, storm_s).await
+}
+
+/// Stores the fixture in the database at `database_url` (as [`install`]).
+pub async fn install_at(database_url: &str, storm_s: f64) -> String {
     let mut metamodel = tokio::task::block_in_place(|| metamodel().0.clone());
     metamodel.study.duration_s = Some(storm_s);
     let body = serde_json::to_string(&metamodel).unwrap();
     let id = uuid::Uuid::new_v4().to_string();
     sqlx::any::install_default_drivers();
-    let pool = sqlx::AnyPool::connect(&app.config.database_url).await.expect("the test database opens");
+    let pool = sqlx::AnyPool::connect(database_url).await.expect("the test database opens");
     sqlx::query("INSERT INTO metamodels (id, job_id, preset, created_at, body) VALUES ($1, NULL, $2, $3, $4)")
         .bind(&id)
         .bind("frame40-kn")
