@@ -38,10 +38,13 @@ pub(super) struct Counter(pub Instant);
 
 impl Observer for Counter {
     fn progress(&self, progress: Progress) {
-        if let Progress::Samples { done, total } = progress
-            && (done == total || done % (total / 10).max(1) == 0)
-        {
-            eprintln!("[{:>7.1} s] {done}/{total} samples", self.0.elapsed().as_secs_f64());
+        let (done, total, what) = match progress {
+            Progress::Samples { done, total } => (done, total, "samples"),
+            Progress::ReferenceStorms { done, total } => (done, total, "reference storms"),
+            _ => return,
+        };
+        if done == total || done % (total / 10).max(1) == 0 {
+            eprintln!("[{:>7.1} s] {done}/{total} {what}", self.0.elapsed().as_secs_f64());
         }
     }
 }

@@ -5,8 +5,9 @@
 //!
 //! A calibration is spread over the replicas: its worker plans it (selection experiments, scales,
 //! structures), queues the other experiments as tasks in chunks, works on them itself, and
-//! assembles the metamodel when every chunk is done. Idle workers of any replica take tasks before
-//! new jobs. Validations and exceedance requests run whole on the worker that claimed them.
+//! assembles the metamodel when every chunk is done. A certified answer queues its reference
+//! storms the same way ([`ReferenceTasks`]). Idle workers of any replica take tasks before new
+//! jobs. The rest of a job runs whole on the worker that claimed it.
 
 use super::analyses::AnalysisJob;
 use super::cache::stored_metamodel;
