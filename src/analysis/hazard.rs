@@ -299,6 +299,9 @@ pub fn hazard_curve(
     })
 }
 
+/// Levels scanned for a return level's first crossing before bisecting ([`return_level`]).
+const RETURN_LEVEL_GRID: usize = 512;
+
 /// The levels an allocation aims at: the metamodel's return levels asked for, its 10-year one
 /// and the limit.
 fn targets(sample: &StratifiedPeaks, options: &HazardOptions) -> Vec<f64> {
@@ -309,12 +312,20 @@ fn targets(sample: &StratifiedPeaks, options: &HazardOptions) -> Vec<f64> {
 }
 
 /// The return level of period T: the first of the ascending `levels` where the estimate falls to
-/// 1 − exp(−1/T), and where each end of the band does (by bisection: every one of them falls with
-/// the level, a certified curve's up to its noise).
+/// 1 − exp(−1/T), and where each end of the band does. A certified band's ends need not fall
+/// monotonically (a stratum's mismatch widens the band at some levels and not at the next), and
+/// the first crossing is the cautious one; so the levels are scanned on a grid of at most
+/// [`RETURN_LEVEL_GRID`] first, then bisected within the grid step where the first crossing lies
+/// (a dip narrower than a grid step may be missed).
 fn return_level(levels: &[f64], period: f64, estimate: impl Fn(f64) -> Estimate) -> ReturnLevel {
     let target = annual_probability_of_period(period);
     let crossing = |end: fn(&Estimate) -> f64| {
-        let i = levels.partition_point(|&x| end(&estimate(x)) > target);
+        let above = |i: usize| end(&estimate(levels[i])) > target;
+        let step = levels.len().div_ceil(RETURN_LEVEL_GRID).max(1);
+        let mut grid = (0..levels.len()).step_by(step).chain(levels.len().checked_sub(1));
+        let first_below = grid.find(|&i| !above(i))?;
+        let from = first_below.saturating_sub(step - 1);
+        let i = from + (from..first_below).collect::<Vec<_>>().partition_point(|&i| above(i));
         levels.get(i).copied()
     };
     ReturnLevel {
@@ -525,6 +536,32 @@ pub(super) mod tests {
         assert_eq!(named, expected);
         let line = crate::analysis::describe_diverged(&curve.first_diverged);
         assert!(line.starts_with(&format!("storm {} (wind_speed = ", expected[0].0)), "{line}");
+    }
+
+    /// A band whose lower end dips to zero over a hundred levels well before it falls for good
+    /// (wider than a grid step of 20): the return level's lower end is the first level where it
+    /// falls (the cautious reading), not where bisection alone might land; the monotone estimate's
+    /// own level is found to the level.
+    #[test]
+    fn a_return_levels_ends_are_the_first_crossings_of_a_band_that_is_not_monotone() {
+        let levels: Vec<f64> = (0..10_000).map(f64::from).collect();
+        let estimate = |x: f64| {
+            let probability = (-x / 1_000.0).exp();
+            let dipped = (3_001.0..3_101.0).contains(&x);
+            Estimate {
+                probability,
+                lower: if dipped { 0.0 } else { 0.5 * probability },
+                upper: probability,
+                cov: None,
+                beyond: 0.0,
+            }
+        };
+        // 1 − exp(−1/T) = exp(−5) at T = 1 / −ln(1 − e⁻⁵).
+        let period = -1.0 / (1.0 - (-5.0f64).exp()).ln();
+        let level = return_level(&levels, period, estimate);
+        assert_eq!(level.value, Some(5_000.0));
+        assert_eq!(level.upper, Some(5_000.0));
+        assert_eq!(level.lower, Some(3_001.0), "the first level where the lower end falls");
     }
 
     #[test]

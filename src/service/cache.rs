@@ -57,6 +57,13 @@ impl<V: Clone> LoadedMetamodels<V> {
     }
 }
 
+/// A stored metamodel's body read back, with the study it rebuilds (blocking).
+pub(super) fn rebuilt(body: &str) -> Result<(Metamodel, Study)> {
+    let metamodel = Metamodel::from_json(body)?;
+    let study = metamodel.study()?;
+    Ok((metamodel, study))
+}
+
 /// A stored metamodel and its study for a job or a task, from this replica's cache or read and
 /// cached; an error naming `metamodel_id` when it was deleted.
 pub(super) async fn stored_metamodel(state: &AppState, id: &str, supervision: &dyn Observer) -> Result<Loaded> {
@@ -70,14 +77,7 @@ pub(super) async fn stored_metamodel(state: &AppState, id: &str, supervision: &d
     let body = through_faults(supervision, "reading a metamodel", || state.store.metamodel_body(id))
         .await?
         .ok_or_else(|| Error::invalid("metamodel_id", "the metamodel was deleted"))?;
-    let loaded = Arc::new(
-        blocking(move || {
-            let metamodel = Metamodel::from_json(&body)?;
-            let study = metamodel.study()?;
-            Ok((metamodel, study))
-        })
-        .await?,
-    );
+    let loaded = Arc::new(blocking(move || rebuilt(&body)).await?);
     state.loaded.lock().expect("cache lock").insert(id, loaded.clone(), generation);
     Ok(loaded)
 }

@@ -3,6 +3,7 @@
 use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
 use crate::analysis::OnThisMachine;
+use crate::service::cache::rebuilt;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
@@ -107,13 +108,7 @@ pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, 
         return Err(ApiError::not_found("metamodel", id));
     }
     let body = state.store.metamodel_body(id).await?.ok_or_else(|| ApiError::not_found("metamodel", id))?;
-    let loaded = tokio::task::spawn_blocking(move || -> crate::error::Result<(Metamodel, Study)> {
-        let metamodel = Metamodel::from_json(&body)?;
-        let study = metamodel.study()?;
-        Ok((metamodel, study))
-    })
-    .await
-    .map_err(ApiError::internal)??;
+    let loaded = tokio::task::spawn_blocking(move || rebuilt(&body)).await.map_err(ApiError::internal)??;
     let loaded = Arc::new(loaded);
     state.loaded.lock().expect("cache lock").insert(id, loaded.clone(), generation);
     Ok(loaded)
