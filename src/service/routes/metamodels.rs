@@ -9,7 +9,6 @@ use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
 use crate::service::routes::operations::{Operation, OperationKind};
 use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
-use crate::study::Study;
 use crate::surrogate::Metamodel;
 use axum::Json;
 use axum::extract::{Path, State};
