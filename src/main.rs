@@ -46,6 +46,8 @@ enum Command {
     Fragility(cli::FragilityArgs),
     /// Sobol indices of a peak response for every input and the storm's phases.
     Sensitivity(cli::SensitivityArgs),
+    /// Peak floor accelerations and drift ratios of storms at one speed, as a pelicun demand sample.
+    Demands(cli::DemandsArgs),
     /// Medians of the stages of one full-size storm, measured side by side.
     Bench(cli::BenchArgs),
 }
@@ -65,6 +67,7 @@ fn main() -> ExitCode {
         Command::Hazard(args) => cli::hazard(args),
         Command::Fragility(args) => cli::fragility(args),
         Command::Sensitivity(args) => cli::sensitivity(args),
+        Command::Demands(args) => cli::demands(args),
     };
     match result {
         Ok(output) => {

@@ -5,6 +5,7 @@
 mod certified_hazard;
 mod certify;
 mod climate;
+mod demands;
 mod exceedance;
 mod fragility;
 mod hazard;
@@ -27,6 +28,7 @@ pub use certify::{
     check_reference_storms, exceedance_figure,
 };
 pub use climate::{ClimateCoverage, ClimateSpec, annual_probability_of_period, period_of_annual_probability};
+pub use demands::{Demands, metamodel_demands};
 pub use exceedance::{
     ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,
     exceedance_csv, exceedance_curve, max_exceedance_gap,

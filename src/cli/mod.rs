@@ -4,6 +4,7 @@
 mod args;
 mod bench;
 mod calibrate;
+mod demands;
 mod exceedance;
 mod fragility;
 mod hazard;
@@ -17,6 +18,7 @@ mod validate;
 pub use args::StudyArgs;
 pub use bench::{BenchArgs, BenchReport, BenchRow, bench, bench_report, table};
 pub use calibrate::{CalibrateArgs, calibrate};
+pub use demands::{DemandsArgs, demands};
 pub use exceedance::{ExceedanceArgs, exceedance};
 pub use fragility::{FragilityArgs, fragility};
 pub use hazard::{HazardArgs, hazard};

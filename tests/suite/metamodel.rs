@@ -11,7 +11,10 @@ use crate::harness::fixture;
 use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
-use windmeta::analysis::{Response, ResponseKind, ResponseView, exceedance_curve, metamodel_peaks, validate};
+use windmeta::analysis::{
+    Response, ResponseKind, ResponseView, STANDARD_GRAVITY, exceedance_curve, metamodel_demands, metamodel_peaks,
+    validate,
+};
 use windmeta::dynamics::{ModalMotion, SampleModel};
 use windmeta::progress::Silent;
 use windmeta::study::{Study, WindPath};
@@ -440,4 +443,34 @@ fn files_whose_terms_cannot_run_are_refused() {
         &|v| v["damper_law"] = serde_json::json!({"exponent": 0.38, "knees": vec![-1.0; modes]}),
         "finite positive knees",
     );
+}
+
+/// A demand sample's columns are the exceedance curves' peaks of each floor and storey at the same
+/// speed and seed, in g and in radians: the batch of every floor's responses against one response
+/// at a time, storm by storm (the same storms, so to rounding).
+#[test]
+fn demands_are_every_floors_peaks_in_pelicuns_units() {
+    let (metamodel, study) = fixture::metamodel();
+    let (speed, samples, seed) = (40.0, 24, 4);
+    let demands = metamodel_demands(metamodel, study, speed, samples, seed, &Silent).unwrap();
+    let inputs = study.inputs.clone().with_fixed("wind_speed", speed).unwrap();
+    let heights = study.structure.storey_heights();
+    let floors = study.structure.floors();
+    assert_eq!((demands.floor_accelerations[0].len(), demands.drift_ratios[0].len()), (floors + 1, floors));
+    for floor in [1, floors / 2, floors] {
+        let single = |response| metamodel_peaks(metamodel, study, &inputs, samples, seed, response, &Silent).unwrap();
+        let accelerations = single(Response::Acceleration { floor });
+        let drifts = single(Response::Drift { floor });
+        for storm in 0..samples {
+            let pfa = demands.floor_accelerations[storm][floor];
+            let pid = demands.drift_ratios[storm][floor - 1];
+            assert!((pfa * STANDARD_GRAVITY / accelerations[storm] - 1.0).abs() < 1e-9, "floor {floor} storm {storm}");
+            assert!((pid * heights[floor - 1] / drifts[storm] - 1.0).abs() < 1e-9, "storey {floor} storm {storm}");
+        }
+    }
+    assert!(demands.floor_accelerations.iter().all(|storm| storm[0] == 0.0), "the ground does not move");
+    let csv = demands.pelicun_csv();
+    assert_eq!(csv.lines().count(), samples + 2, "header, units, one row per storm");
+    let bad = metamodel_demands(metamodel, study, -1.0, samples, seed, &Silent).unwrap_err();
+    assert!(bad.to_string().contains("wind_speed"), "{bad}");
 }
