@@ -4,6 +4,7 @@
 mod analyses;
 mod cache;
 mod config;
+mod demands;
 mod error;
 mod exceedance;
 mod jobs;

@@ -573,11 +573,13 @@ async fn provoke(app: &TestApp, ids: &Ids, method: &str, template: &str, status:
         }
         "/v1/metamodels/{id}/fragility" => json!({"thresholds": [0.01], "wind_speeds": [29, 31], "samples": 10}),
         "/v1/metamodels/{id}/sensitivity" => json!({"samples": 10, "seed": 2}),
+        "/v1/metamodels/{id}/demands" => json!({"wind_speed": 40, "samples": 5}),
         _ => json!({}),
     };
     let invalid_body = match template {
         "/v1/calibrations" => json!({"experiments": 2}),
         "/v1/metamodels/{id}/exceedance" => json!({"samples": 0}),
+        "/v1/metamodels/{id}/demands" => json!({"wind_speed": 40, "samples": 0}),
         _ => json!({"samples": 1}),
     };
     let url = |query: &str| format!("{}{path}{query}", app.address);

@@ -474,3 +474,31 @@ fn demands_are_every_floors_peaks_in_pelicuns_units() {
     let bad = metamodel_demands(metamodel, study, -1.0, samples, seed, &Silent).unwrap_err();
     assert!(bad.to_string().contains("wind_speed"), "{bad}");
 }
+
+/// Over HTTP the demand sample is the library's, as `text/csv`; bad input is refused naming the field.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn the_demand_route_answers_the_librarys_sample() {
+    use crate::harness::app::{assert_problem, database, problem_details, spawn_app};
+    let app = spawn_app(&database("demands")).await;
+    let id = fixture::install(&app, fixture::STORM_S).await;
+    let path = format!("/v1/metamodels/{id}/demands");
+    let response = app.post(&path, serde_json::json!({"wind_speed": 36, "samples": 12, "seed": 3})).await;
+    assert_eq!(response.status().as_u16(), 200);
+    assert_eq!(response.headers()["content-type"], "text/csv");
+    let served = response.text().await.unwrap();
+    let (metamodel, study) = fixture::metamodel();
+    let here = tokio::task::block_in_place(|| metamodel_demands(metamodel, study, 36.0, 12, 3, &Silent).unwrap());
+    assert_eq!(served, here.pelicun_csv());
+    for (wrong, field) in [
+        (serde_json::json!({"wind_speed": 36, "samples": 0}), "samples"),
+        (serde_json::json!({"wind_speed": 36, "samples": 10001}), "samples"),
+        (serde_json::json!({"wind_speed": -1}), "wind_speed"),
+        (serde_json::json!({"wind_speed": 1e300}), "wind_speed"),
+    ] {
+        let (status, content_type, body) = problem_details(app.post(&path, wrong.clone()).await).await;
+        assert_problem(status, &content_type, &body, 422, field);
+    }
+    let (status, _, _) = problem_details(app.post(&path, serde_json::json!({"samples": 3})).await).await;
+    assert_eq!(status, 422, "the wind speed is required");
+    app.stop().await;
+}

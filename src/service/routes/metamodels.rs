@@ -1,9 +1,10 @@
 //! Stored metamodels, and the exceedance curves sampled from them.
 
-use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
+use super::sampling::{Queued, SamplingResponses, Work, answer_now, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
 use crate::analysis::OnThisMachine;
 use crate::service::cache::rebuilt;
+use crate::service::demands::DemandsRequest;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
@@ -26,6 +27,7 @@ pub fn router() -> OpenApiRouter<AppState> {
         .routes(routes!(get_metamodel, delete_metamodel))
         .routes(routes!(exceedance_curve))
         .routes(routes!(start_validation))
+        .routes(routes!(demand_sample))
 }
 
 /// A stored metamodel in a list.
@@ -155,6 +157,32 @@ async fn exceedance_curve(
         Ok(request.answer(metamodel, study, &id, &OnThisMachine, observer)?.render(rendering))
     });
     answer_or_queue(&state, &headers, loaded, storms, queued, work).await
+}
+
+/// Per storm at one wind speed, the peak acceleration of every floor (g) and the peak drift ratio of
+/// every storey (rad), as pelicun reads a demand sample for FEMA P-58 loss assessment (a header
+/// `,1-PFA-0-1,…,1-PID-1-1,…`, a `Units` row, a row per storm). Answered at once.
+#[utoipa::path(post, path = "/v1/metamodels/{id}/demands", tag = "metamodels",
+    request_body = DemandsRequest,
+    params(("id" = String, Path, description = "Metamodel id")),
+    responses(
+        (status = 200, description = "The demand sample", content(
+            (String = "text/csv", example = ",1-PFA-0-1,1-PFA-1-1,1-PID-1-1\nUnits,g,g,rad\n0,0e0,2.37e-3,1.1e-4\n"),
+        )),
+        (status = 404, description = "No such metamodel", body = ProblemDetails, content_type = "application/problem+json"),
+        (status = 422, description = "A field is invalid (named in `errors`), or a storm diverged", body = ProblemDetails, content_type = "application/problem+json"),
+    ))]
+async fn demand_sample(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    ApiJson(request): ApiJson<DemandsRequest>,
+) -> Result<HttpResponse, ApiError> {
+    request.check(&state.config)?;
+    let loaded = load(&state, &id).await?;
+    let work: Work =
+        Box::new(move |metamodel, study, observer, _| Ok(("text/csv", request.answer(metamodel, study, observer)?)));
+    answer_now(&state, &headers, loaded, work).await
 }
 
 /// Validates the metamodel against the reference model on fresh samples, as an operation whose

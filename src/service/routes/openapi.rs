@@ -61,6 +61,8 @@ pub fn state_configured_limits(spec: &mut utoipa::openapi::OpenApi, config: &Ser
     set_maximum(spec, "ExceedanceRequest", "samples", config.max_samples.min(crate::analysis::MAX_SAMPLES));
     let reference_storms = config.max_reference_storms.min(crate::analysis::MAX_REFERENCE_STORMS);
     set_maximum(spec, "CertifyOptions", "reference_storms", reference_storms);
+    let demand_samples = config.max_sync_samples.min(crate::service::demands::MAX_DEMAND_SAMPLES);
+    set_maximum(spec, "DemandsRequest", "samples", demand_samples);
 }
 
 /// Sets the maximum of a request property, where the description has the request (a worker

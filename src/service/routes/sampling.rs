@@ -60,6 +60,17 @@ pub async fn answer_or_queue(
         let Queued { endpoint, kind, job } = queued();
         return accept_job(state, headers, endpoint, kind, job).await;
     }
+    answer_now(state, headers, loaded, work).await
+}
+
+/// Answers with `work` at once on a blocking thread, within the server's synchronous slots and
+/// timeout, and stopped when the client leaves.
+pub async fn answer_now(
+    state: &AppState,
+    headers: &HeaderMap,
+    loaded: Loaded,
+    work: Work,
+) -> Result<HttpResponse, ApiError> {
     let slots = state.config.sync_request_slots();
     let permit = state.sampling.clone().try_acquire_owned().map_err(|_| {
         ApiError::unavailable(
