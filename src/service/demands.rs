@@ -19,7 +19,7 @@ pub const MAX_DEMAND_SAMPLES: usize = 10_000;
 #[serde(deny_unknown_fields)]
 pub struct DemandsRequest {
     /// The storm speed at 10 m (m/s), inside the metamodel's wind-speed law's support.
-    #[schema(minimum = 0, maximum = 150)]
+    #[schema(exclusive_minimum = 0, exclusive_maximum = 150)]
     pub wind_speed: f64,
     /// Storms, the rows of the sample; at most 10 000 and the server's `--max-sync-samples` (the
     /// contract a server serves states its own bound).
@@ -46,8 +46,8 @@ impl DemandsRequest {
         if self.samples == 0 || self.samples > bound {
             return Err(Error::invalid("samples", format!("must be between 1 and {bound}, got {}", self.samples)));
         }
-        if !(0.0..=150.0).contains(&self.wind_speed) {
-            return Err(Error::invalid("wind_speed", format!("must lie in [0, 150] m/s, got {}", self.wind_speed)));
+        if !(self.wind_speed > 0.0 && self.wind_speed < 150.0) {
+            return Err(Error::invalid("wind_speed", format!("must lie in (0, 150) m/s, got {}", self.wind_speed)));
         }
         Ok(())
     }
