@@ -17,12 +17,12 @@
 use super::Response;
 use super::exceedance::{ExceedanceCurve, clopper_pearson, exceedance_curve};
 use super::plot::exceedance_svg;
-use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
+use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_rows, reference_storm_seed};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
 use crate::surrogate::Metamodel;
-use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
+use crate::uncertainty::InputModel;
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -73,8 +73,7 @@ pub fn certify_exceedance(
     check_reference_storms(options.reference_storms, metamodel_peaks.len(), "certify.reference_storms")?;
     let storms = options.reference_storms;
     let runs = PairedRuns { metamodel, study, seed: reference_storm_seed(seed), response, order: options.order };
-    let rows = monte_carlo(inputs, storms, &mut rng_from_seed(runs.seed));
-    let streams: Vec<usize> = (0..storms).collect();
+    let (rows, streams) = reference_rows(inputs, storms, runs.seed);
     let paired = runner.pairs(&runs, &rows, &streams, observer)?;
     let CertifiedCurve { curve, certification, .. } =
         certified_curve(metamodel_peaks, &paired, thresholds, options.order, confidence);
@@ -191,7 +190,7 @@ pub fn certified_curve(
         curve.upper.push((centre + half_width).clamp(0.0, 1.0));
         // What the metamodel alone says, and all that was added to it: the scaling and the pairs.
         let alone = exceeding(t) / m;
-        let (metamodel_lower, metamodel_upper) = clopper_pearson(exceeding(t), m, confidence);
+        let (metamodel_lower, metamodel_upper) = clopper_pearson(alone * m, m, confidence);
         let correction_half_width = z * correction.variance.sqrt();
         let scaling = scaled - alone;
         certification.metamodel_probabilities.push(alone);

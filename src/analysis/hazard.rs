@@ -320,12 +320,12 @@ fn targets(sample: &StratifiedPeaks, options: &HazardOptions) -> Vec<f64> {
 fn return_level(levels: &[f64], period: f64, estimate: impl Fn(f64) -> Estimate) -> ReturnLevel {
     let target = annual_probability_of_period(period);
     let crossing = |end: fn(&Estimate) -> f64| {
-        let above = |i: usize| end(&estimate(levels[i])) > target;
+        let above = |x: f64| end(&estimate(x)) > target;
         let step = levels.len().div_ceil(RETURN_LEVEL_GRID).max(1);
         let mut grid = (0..levels.len()).step_by(step).chain(levels.len().checked_sub(1));
-        let first_below = grid.find(|&i| !above(i))?;
+        let first_below = grid.find(|&i| !above(levels[i]))?;
         let from = first_below.saturating_sub(step - 1);
-        let i = from + (from..first_below).collect::<Vec<_>>().partition_point(|&i| above(i));
+        let i = from + levels[from..first_below].partition_point(|&x| above(x));
         levels.get(i).copied()
     };
     ReturnLevel {

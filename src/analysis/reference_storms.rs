@@ -38,10 +38,13 @@ pub fn paired_peaks(
     order: Order,
     observer: &dyn Observer,
 ) -> Result<Vec<PairedPeak>> {
-    let rows = monte_carlo(inputs, storms, &mut rng_from_seed(seed));
-    let streams: Vec<usize> = (0..storms).collect();
-    let draws = Draws { study, rows: &rows, storms: &streams, seed, on_divergence: OnDivergence::Exceed };
-    paired_peaks_at(metamodel, &draws, response, order, observer)
+    let (rows, streams) = reference_rows(inputs, storms, seed);
+    PairedRuns { metamodel, study, seed, response, order }.run(&rows, &streams, observer)
+}
+
+/// `storms` draws of `inputs` from `seed`, storm k's wind from stream k.
+pub fn reference_rows(inputs: &InputModel, storms: usize, seed: u64) -> (Vec<Vec<f64>>, Vec<usize>) {
+    (monte_carlo(inputs, storms, &mut rng_from_seed(seed)), (0..storms).collect())
 }
 
 /// What fixes a certified answer's storms through both models, apart from their rows: the models,

@@ -110,44 +110,49 @@ async fn prepare(
         }
         "validation" => {
             let job: ValidationJob = parse(request)?;
-            let loaded = stored_metamodel(state, &job.metamodel_id, supervision.as_ref()).await?;
-            Ok(Box::pin(blocking(move || {
-                let (metamodel, study) = (&loaded.0, &loaded.1);
+            let metamodel_id = job.metamodel_id.clone();
+            sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
                 let inputs = held_inputs(study, &job.fixed)?;
-                let report = validate(metamodel, study, &inputs, job.samples, job.seed, supervision.as_ref())?;
-                Ok((
-                    JobOutput::Answer(serde_json::to_string(&report).expect("a report serialises")),
-                    study.name.clone(),
-                ))
-            })))
+                validate(metamodel, study, &inputs, job.samples, job.seed, observer)
+            })
+            .await
         }
         "exceedance" => {
             let job: ExceedanceJob = parse(request)?;
-            let loaded = stored_metamodel(state, &job.metamodel_id, supervision.as_ref()).await?;
             let reference = reference_tasks(state, id, owner, &job.metamodel_id);
-            Ok(Box::pin(blocking(move || {
-                let (metamodel, study) = (&loaded.0, &loaded.1);
-                let answer =
-                    job.request.answer(metamodel, study, &job.metamodel_id, &reference, supervision.as_ref())?;
-                Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("a curve serialises")), study.name.clone()))
-            })))
+            let metamodel_id = job.metamodel_id.clone();
+            sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
+                job.request.answer(metamodel, study, &job.metamodel_id, &reference, observer)
+            })
+            .await
         }
         "hazard" | "fragility" | "sensitivity" => {
             let job: AnalysisJob = parse(request)?;
-            let loaded = stored_metamodel(state, &job.metamodel_id, supervision.as_ref()).await?;
             let reference = reference_tasks(state, id, owner, &job.metamodel_id);
-            Ok(Box::pin(blocking(move || {
-                let (metamodel, study) = (&loaded.0, &loaded.1);
-                let answer =
-                    job.request.answer(metamodel, study, &job.metamodel_id, &reference, supervision.as_ref())?;
-                Ok((
-                    JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")),
-                    study.name.clone(),
-                ))
-            })))
+            let metamodel_id = job.metamodel_id.clone();
+            sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
+                job.request.answer(metamodel, study, &job.metamodel_id, &reference, observer)
+            })
+            .await
         }
         other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
     }
+}
+
+/// A job that samples a stored metamodel: `answer` on it, off the runtime, the answer's JSON the
+/// job's output.
+async fn sampling_job<T: serde::Serialize>(
+    state: &AppState,
+    metamodel_id: &str,
+    supervision: Arc<Supervision>,
+    answer: impl FnOnce(&Metamodel, &Study, &Supervision) -> Result<T> + Send + 'static,
+) -> Result<WorkFuture> {
+    let loaded = stored_metamodel(state, metamodel_id, supervision.as_ref()).await?;
+    Ok(Box::pin(blocking(move || {
+        let (metamodel, study) = (&loaded.0, &loaded.1);
+        let answer = answer(metamodel, study, supervision.as_ref())?;
+        Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")), study.name.clone()))
+    })))
 }
 
 /// Where the job's certified answer runs its reference storms: as tasks of the job.
