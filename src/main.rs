@@ -48,6 +48,10 @@ enum Command {
     Sensitivity(cli::SensitivityArgs),
     /// Peak floor accelerations and drift ratios of storms at one speed, as a pelicun demand sample.
     Demands(cli::DemandsArgs),
+    /// Comfort, drift and strength criteria judged together under a climate, with verdicts.
+    Serviceability(cli::ServiceabilityArgs),
+    /// The T-year level of a response with one input held at each of several values.
+    Sweep(cli::SweepArgs),
     /// Medians of the stages of one full-size storm, measured side by side.
     Bench(cli::BenchArgs),
 }
@@ -68,6 +72,8 @@ fn main() -> ExitCode {
         Command::Fragility(args) => cli::fragility(args),
         Command::Sensitivity(args) => cli::sensitivity(args),
         Command::Demands(args) => cli::demands(args),
+        Command::Serviceability(args) => cli::serviceability(args),
+        Command::Sweep(args) => cli::sweep(args),
     };
     match result {
         Ok(output) => {

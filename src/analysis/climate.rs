@@ -93,6 +93,14 @@ impl ClimateSpec {
     }
 }
 
+/// The law a request's climate names, or the metamodel's own wind-speed law when it names none.
+pub fn climate_or_own(spec: Option<&ClimateSpec>, study: &crate::study::Study) -> Result<Marginal> {
+    match spec {
+        Some(spec) => spec.resolve("climate"),
+        None => Ok(*study.inputs.marginal(crate::study::WIND_SPEED)?),
+    }
+}
+
 /// A calibration asked to cover a climate: its design spans the speeds from the climate's 1-year
 /// speed (exceeded with 1 − e⁻¹ a year: where a comfort check starts) to the speed exceeded with
 /// `annual_probability` a year (see

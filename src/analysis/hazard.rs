@@ -2,12 +2,13 @@
 //! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
 //! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
 
+use super::annual_sample::{AnnualDesign, AnnualSample};
 use super::certified_hazard::{CertifiedPoint, HazardCertification, PairedStrata};
 use super::certify::{CertifyOptions, check_reference_storms};
 use super::climate::{annual_probability_of_period, period_of_annual_probability};
 use super::exceedance::{automatic_thresholds, check_confidence};
 use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
-use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, name_diverged, peaks_at};
+use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, peaks_at};
 use super::strata::{Estimate, Sampling, StormRows, StratifiedPeaks, WindStrata, pilot};
 use super::{Response, check_thresholds};
 use crate::error::{Error, Result};
@@ -32,15 +33,12 @@ const ALWAYS_TARGETED_PERIOD: f64 = 10.0;
 /// the 10⁻⁵ that at most 10⁵ storms resolve with a coefficient of variation below 0.3.
 pub const MAX_RETURN_PERIOD: f64 = 1e6;
 
-/// One in this many of an analysis's storms go to its pilot, equally over the strata.
-const PILOT_SHARE: usize = 4;
-
 /// One in this many of a certified analysis's reference storms go to their pilot: more than the
 /// metamodel's, for the pilot also measures how far the two models disagree.
 const REFERENCE_PILOT_SHARE: usize = 2;
 
 /// The largest station speed the wind model admits (m/s).
-const MAX_SPEED: f64 = 150.0;
+pub(super) const MAX_SPEED: f64 = 150.0;
 
 /// What an annual analysis is asked.
 #[derive(Debug, Clone, PartialEq)]
@@ -230,25 +228,15 @@ pub fn hazard_curve(
     options.check()?;
     let strata = options.strata();
     let draws = StormRows { inputs, wind: inputs.index_of(WIND_SPEED)?, climate: &options.climate, strata: &strata };
-    let mut rng = rng_from_seed(options.seed);
-    let (mut run, mut diverged, mut first_diverged) = (0, 0, Vec::new());
-    let mut stage = |counts: &[usize]| -> Result<(Vec<f64>, Vec<bool>)> {
-        let (rows, speeds) = draws.rows(counts, &mut rng)?;
-        let peaks = peaks_of(&rows, run)?;
-        diverged += peaks.iter().filter(|p| p.is_infinite()).count();
-        name_diverged(inputs, &rows, run.., &peaks, &mut first_diverged);
-        run += rows.len();
-        Ok((peaks, speeds.iter().map(|v| !(calibrated[0]..=calibrated[1]).contains(v)).collect()))
+    let design = AnnualDesign { rows: draws, samples: options.samples, calibrated };
+    let one_column = |rows: &[Vec<f64>], first: usize| -> Result<Vec<Vec<f64>>> {
+        Ok(peaks_of(rows, first)?.into_iter().map(|peak| vec![peak]).collect())
     };
-    let pilot_counts = pilot(&strata, options.samples, PILOT_SHARE, "samples")?;
-    let (peaks, outside) = stage(&pilot_counts)?;
-    let mut sample = StratifiedPeaks::new(&strata, &pilot_counts, &peaks, &outside);
-    let budget = options.samples - pilot_counts.iter().sum::<usize>();
-    if strata.count() > 1 && budget > 0 {
-        let counts = strata.neyman(&sample, &targets(&sample, options), budget);
-        let (peaks, outside) = stage(&counts)?;
-        sample.add(&counts, &peaks, &outside);
-    }
+    let aims = |columns: &[StratifiedPeaks]| targets(&columns[0], options).into_iter().map(|x| (0, x)).collect();
+    let AnnualSample { columns, storms: run, diverged, first_diverged } =
+        design.draw(&mut rng_from_seed(options.seed), one_column, aims)?;
+    let draws = design.rows;
+    let sample = columns.into_iter().next().expect("one column");
     let paired = match &options.certify {
         Some(certify) => {
             let seed = reference_storm_seed(options.seed);
@@ -317,7 +305,7 @@ fn targets(sample: &StratifiedPeaks, options: &HazardOptions) -> Vec<f64> {
 /// the first crossing is the cautious one; so the levels are scanned on a grid of at most
 /// [`RETURN_LEVEL_GRID`] first, then bisected within the grid step where the first crossing lies
 /// (a dip narrower than a grid step may be missed).
-fn return_level(levels: &[f64], period: f64, estimate: impl Fn(f64) -> Estimate) -> ReturnLevel {
+pub(super) fn return_level(levels: &[f64], period: f64, estimate: impl Fn(f64) -> Estimate) -> ReturnLevel {
     let target = annual_probability_of_period(period);
     let crossing = |end: fn(&Estimate) -> f64| {
         let above = |x: f64| end(&estimate(x)) > target;

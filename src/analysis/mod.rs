@@ -2,6 +2,7 @@
 //! annual curves and return levels under a wind climate, fragility curves, Sobol indices, and the
 //! validation of a metamodel against the reference.
 
+mod annual_sample;
 mod certified_hazard;
 mod certify;
 mod climate;
@@ -17,8 +18,10 @@ mod reference;
 mod reference_storms;
 mod response;
 mod sampling;
+mod serviceability;
 mod sobol;
 mod strata;
+mod sweep;
 mod validated_responses;
 mod validation;
 
@@ -27,7 +30,9 @@ pub use certify::{
     Certification, CertifiedCurve, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, certify_exceedance,
     check_reference_storms, exceedance_figure,
 };
-pub use climate::{ClimateCoverage, ClimateSpec, annual_probability_of_period, period_of_annual_probability};
+pub use climate::{
+    ClimateCoverage, ClimateSpec, annual_probability_of_period, climate_or_own, period_of_annual_probability,
+};
 pub use demands::{Demands, metamodel_demands};
 pub use exceedance::{
     ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,
@@ -41,7 +46,7 @@ pub use hazard::{
     hazard_curve, metamodel_hazard,
 };
 pub use peaks::{PeakSummary, pearson, quantile};
-pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, validation_svg};
+pub use plot::{exceedance_svg, fragility_svg, hazard_svg, profile_svg, serviceability_svg, sweep_svg, validation_svg};
 pub use profile::{PeakProfile, ProfileSamples, check_quantile, metamodel_profiles, profile_responses};
 pub use reference::{reference_history, reference_peak};
 pub use reference_storms::{
@@ -51,7 +56,12 @@ pub use response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_
 pub use sampling::{
     DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, check_samples, describe_diverged, metamodel_peaks, peaks_at,
 };
+pub use serviceability::{
+    BUILT_IN, Criterion, CriterionCheck, CriterionChoice, FailureMode, LevelProfile, RiskCategory, Serviceability,
+    ServiceabilityOptions, Statistic, StrengthCheck, StrengthTarget, Verdict, built_in, metamodel_serviceability,
+};
 pub use sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensitivity, sobol_indices};
 pub use strata::Sampling;
+pub use sweep::{MAX_SWEEP_VALUES, Sweep, SweepOptions, SweepPoint, metamodel_sweep};
 pub use validated_responses::ResponseValidation;
 pub use validation::{ValidationReport, validate};

@@ -1,7 +1,7 @@
 //! SVG figures: exceedance curves with their bands (the paper's Fig. 7), the scatter of peaks,
 //! reference against metamodel (Fig. 6), annual curves with return levels, and fragility curves.
 
-use super::{ExceedanceCurve, Fragility, HazardCurve, PeakProfile};
+use super::{ExceedanceCurve, Fragility, HazardCurve, PeakProfile, Serviceability, Sweep};
 use plotters::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -61,6 +61,90 @@ fn draw_curves(
 }
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
+
+/// A serviceability check's profiles against their limits: at every judged floor, the T-year level
+/// over its limit (the utilisation) with its band, one colour per criterion, and the limit at 1.
+pub fn serviceability_svg(check: &Serviceability) -> String {
+    let ratios = |values: &[Option<f64>], limits: &[f64]| -> Vec<Option<f64>> {
+        values.iter().zip(limits).map(|(v, limit)| v.map(|v| v / limit)).collect()
+    };
+    let drawn: Vec<_> = check
+        .criteria
+        .iter()
+        .map(|c| {
+            let p = &c.profile;
+            let floors: Vec<f64> = p.floors.iter().map(|&f| f as f64).collect();
+            (
+                c.name.clone(),
+                floors,
+                ratios(&p.values, &p.limits),
+                ratios(&p.lower, &p.limits),
+                ratios(&p.upper, &p.limits),
+            )
+        })
+        .collect();
+    let top = check.criteria.iter().flat_map(|c| c.profile.floors.iter().copied()).max().unwrap_or(1) as f64;
+    render((640, 640), |root| {
+        let all = drawn.iter().flat_map(|d| d.2.iter().chain(&d.3).chain(&d.4).flatten().copied());
+        let range = axis_range(all.chain([0.0, 1.0]), 0.04);
+        let Ok(mut chart) = ChartBuilder::on(root)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(48)
+            .build_cartesian_2d(range.start.max(0.0)..range.end, 0.0..top + 1.0)
+        else {
+            return;
+        };
+        let _ = chart.configure_mesh().x_desc("T-year level / limit").y_desc("floor").draw();
+        let _ = chart.draw_series(LineSeries::new([(1.0, 0.0), (1.0, top + 1.0)], BLACK.stroke_width(1)));
+        for (i, (name, floors, values, lower, upper)) in drawn.iter().enumerate() {
+            let colour = COLOURS[i % COLOURS.len()];
+            let points = |xs: &[Option<f64>]| -> Vec<(f64, f64)> {
+                xs.iter().zip(floors).filter_map(|(x, f)| Some(((*x)?, *f))).collect()
+            };
+            let band: Vec<(f64, f64)> = points(lower).into_iter().chain(points(upper).into_iter().rev()).collect();
+            let _ = chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.15).filled())));
+            if let Ok(series) = chart.draw_series(LineSeries::new(points(values), colour.stroke_width(2))) {
+                series
+                    .label(name.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 16, y)], colour.stroke_width(2)));
+            }
+        }
+        let _ = chart.configure_series_labels().background_style(WHITE.mix(0.8)).border_style(BLACK).draw();
+    })
+}
+
+/// A sweep: the T-year level against the swept input's value, with its band, and a limit when
+/// one is given.
+pub fn sweep_svg(sweep: &Sweep, y_label: &str, limit: Option<f64>) -> String {
+    let at = |pick: fn(&super::SweepPoint) -> Option<f64>| -> Vec<(f64, f64)> {
+        sweep.results.iter().filter_map(|p| Some((p.input_value, pick(p)?))).collect()
+    };
+    let (values, lower, upper) = (at(|p| p.level), at(|p| p.lower), at(|p| p.upper));
+    render((760, 500), |root| {
+        let x_range = axis_range(sweep.results.iter().map(|p| p.input_value), 0.04);
+        let ys = lower.iter().chain(&upper).map(|p| p.1).chain(limit);
+        let y_range = axis_range(ys, 0.06);
+        let Ok(mut chart) = ChartBuilder::on(root)
+            .margin(12)
+            .x_label_area_size(40)
+            .y_label_area_size(64)
+            .build_cartesian_2d(x_range.clone(), y_range.start.max(0.0)..y_range.end)
+        else {
+            return;
+        };
+        let _ = chart.configure_mesh().x_desc(sweep.input.as_str()).y_desc(y_label).draw();
+        let band: Vec<(f64, f64)> = lower.iter().copied().chain(upper.iter().rev().copied()).collect();
+        let colour = COLOURS[0];
+        let _ = chart.draw_series(std::iter::once(Polygon::new(band, colour.mix(0.15).filled())));
+        let _ = chart.draw_series(LineSeries::new(values.clone(), colour.stroke_width(2)));
+        let _ = chart.draw_series(values.iter().map(|&p| Circle::new(p, 4, colour.filled())));
+        if let Some(limit) = limit {
+            let line = [(x_range.start, limit), (x_range.end, limit)];
+            let _ = chart.draw_series(LineSeries::new(line, COLOURS[1].stroke_width(1)));
+        }
+    })
+}
 
 /// An SVG of `size` pixels on a white ground, drawn by `draw`.
 fn render(size: (u32, u32), draw: impl FnOnce(&Area<'_>)) -> String {

@@ -90,14 +90,15 @@ impl WindStrata {
         speeds
     }
 
-    /// Neyman's allocation of `budget` storms for the given pilot: n_s ∝ w_s·√(p_s(1 − p_s)), the
-    /// allocation of least variance, summed over `targets` each weighted by 1/P(x)² so that every
-    /// target's relative error counts alike; p_s from the pilot as (k + ½)/(n + 1), so that a
-    /// stratum the pilot saw no exceedance in keeps some storms.
-    pub fn neyman(&self, pilot: &StratifiedPeaks, targets: &[f64], budget: usize) -> Vec<usize> {
+    /// Neyman's allocation of `budget` storms for the given pilots: n_s ∝ w_s·√(p_s(1 − p_s)), the
+    /// allocation of least variance, summed over the targets (a pilot's peaks and a level x of
+    /// them) each weighted by 1/P(x)² so that every target's relative error counts alike; p_s from
+    /// the pilot as (k + ½)/(n + 1), so that a stratum the pilot saw no exceedance in keeps some
+    /// storms.
+    pub fn neyman(&self, targets: &[(&StratifiedPeaks, f64)], budget: usize) -> Vec<usize> {
         let weights = self.weights();
         let mut scores = vec![0.0; weights.len()];
-        for &x in targets {
+        for &(pilot, x) in targets {
             let total = pilot.exceedance_fraction(x).max(f64::MIN_POSITIVE);
             for (s, stratum) in pilot.strata.iter().enumerate() {
                 let hits = (stratum.len() - stratum.partition_point(|p| p.0 <= x)) as f64;
@@ -106,6 +107,10 @@ impl WindStrata {
             }
         }
         let sum: f64 = scores.iter().sum();
+        if sum.is_nan() || sum <= 0.0 {
+            // No target: the storms shared equally.
+            return vec![budget / weights.len(); weights.len()];
+        }
         scores.iter().map(|a| (budget as f64 * a / sum).floor() as usize).collect()
     }
 }

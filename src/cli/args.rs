@@ -150,6 +150,15 @@ pub struct AnalysisArgs {
     pub json: bool,
 }
 
+/// The climate `--climate` gives as JSON, or the metamodel's own wind-speed law.
+pub fn climate_arg(text: Option<&str>, study: &crate::study::Study) -> Result<crate::uncertainty::Marginal> {
+    let spec = text
+        .map(serde_json::from_str::<crate::analysis::ClimateSpec>)
+        .transpose()
+        .map_err(|e| Error::invalid("climate", e.to_string()))?;
+    crate::analysis::climate_or_own(spec.as_ref(), study)
+}
+
 /// The format of `--out` by its extension, one of `allowed`.
 pub fn out_format(out: Option<&std::path::Path>, allowed: &[&str]) -> Result<Option<String>> {
     let Some(path) = out else { return Ok(None) };

@@ -1,14 +1,13 @@
 //! `windmeta hazard`: the annual exceedance curve of a peak response under a wind climate, its
 //! return levels and, at a limit, the reliability index.
 
-use super::args::{AnalysisArgs, CertifyArgs, ResponseArgs, answer, out_format};
+use super::args::{AnalysisArgs, CertifyArgs, ResponseArgs, answer, climate_arg, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    ClimateSpec, DEFAULT_RETURN_PERIODS, HazardCurve, HazardOptions, OnThisMachine, Sampling, WIND_SPEED, hazard_svg,
-    metamodel_hazard,
+    DEFAULT_RETURN_PERIODS, HazardCurve, HazardOptions, OnThisMachine, Sampling, hazard_svg, metamodel_hazard,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use clap::{Args, ValueEnum};
 use std::path::PathBuf;
 use std::time::Instant;
@@ -57,12 +56,7 @@ pub struct HazardArgs {
 pub fn hazard(args: &HazardArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.model)?;
-    let climate = match &args.climate {
-        Some(text) => serde_json::from_str::<ClimateSpec>(text)
-            .map_err(|e| Error::invalid("climate", e.to_string()))?
-            .resolve("climate")?,
-        None => *study.inputs.marginal(WIND_SPEED)?,
-    };
+    let climate = climate_arg(args.climate.as_deref(), &study)?;
     let options = HazardOptions {
         climate,
         samples: args.samples,

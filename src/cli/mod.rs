@@ -1,5 +1,5 @@
 //! The offline commands: what `windmeta modes`, `simulate`, `sample-peaks`, `calibrate`, `validate`,
-//! `exceedance`, `hazard`, `fragility`, `sensitivity` and `bench` do, as functions of their parsed arguments. `main.rs` only parses and dispatches.
+//! `exceedance`, `profile`, `hazard`, `fragility`, `sensitivity`, `demands`, `serviceability`, `sweep` and `bench` do, as functions of their parsed arguments. `main.rs` only parses and dispatches.
 
 mod args;
 mod bench;
@@ -12,7 +12,9 @@ mod modes;
 mod peaks;
 mod profile;
 mod sensitivity;
+mod serviceability;
 mod simulate;
+mod sweep;
 mod validate;
 
 pub use args::StudyArgs;
@@ -26,7 +28,9 @@ pub use modes::{ModesArgs, modes};
 pub use peaks::{SamplePeaksArgs, sample_peaks};
 pub use profile::{ProfileArgs, profile};
 pub use sensitivity::{SensitivityArgs, sensitivity};
+pub use serviceability::{ServiceabilityArgs, serviceability};
 pub use simulate::{SimulateArgs, simulate};
+pub use sweep::{SweepArgs, sweep};
 pub use validate::{ValidateArgs, validate};
 
 use crate::error::{Error, Result};

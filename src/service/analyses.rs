@@ -8,7 +8,7 @@ use super::rendering::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
     CertifyOptions, ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions,
-    ReferenceRunner, Response, ResponseKind, ResponseName, Sampling, Sensitivity, WIND_SPEED, check_confidence,
+    ReferenceRunner, Response, ResponseKind, ResponseName, Sampling, Sensitivity, check_confidence, climate_or_own,
     fragility_svg, hazard_svg, metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
 };
 use crate::error::{Error, Result};
@@ -120,12 +120,8 @@ pub struct FragilityRequest {
 impl HazardRequest {
     /// The analysis's options: the climate resolved (the metamodel's own wind law by default).
     fn options(&self, study: &Study) -> Result<HazardOptions> {
-        let climate = match &self.climate {
-            Some(spec) => spec.resolve("climate")?,
-            None => *study.inputs.marginal(WIND_SPEED)?,
-        };
         Ok(HazardOptions {
-            climate,
+            climate: climate_or_own(self.climate.as_ref(), study)?,
             samples: self.samples,
             seed: self.seed,
             thresholds: self.thresholds.clone(),

@@ -1,0 +1,409 @@
+//! The serviceability check a design office signs: several criteria at once under the site's
+//! climate, each the T-year level of a response over a range of floors against a limit, with its
+//! band, its governing floor and a verdict; a strength criterion's annual probability of exceeding
+//! its limit against ASCE 7's target. Every floor and criterion is read off the same storms
+//! ([`super::annual_sample`]), stratified over the climate as an annual curve is.
+
+mod criteria;
+
+pub use criteria::{
+    BUILT_IN, Criterion, CriterionChoice, FailureMode, MAX_CRITERIA, ResolvedCriterion, RiskCategory, Statistic,
+    StrengthTarget, built_in,
+};
+
+use super::annual_sample::{Aim, AnnualDesign, AnnualSample, PILOT_SHARE};
+use super::exceedance::check_confidence;
+use super::hazard::{MAX_SPEED, WIND_SPEED, return_level};
+use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, peak_sets_at};
+use super::strata::{Estimate, StormRows, StratifiedPeaks, WindStrata, pilot};
+use super::{Response, ResponseKind};
+use crate::error::{Error, Result};
+use crate::progress::Observer;
+use crate::study::Study;
+use crate::surrogate::Metamodel;
+use crate::uncertainty::{Marginal, rng_from_seed};
+use serde::{Deserialize, Serialize};
+use statrs::distribution::{ContinuousCDF, Normal};
+
+/// What a serviceability check is asked.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ServiceabilityOptions {
+    /// The law of the annual maximum storm speed.
+    pub climate: Marginal,
+    pub criteria: Vec<Criterion>,
+    pub samples: usize,
+    pub seed: u64,
+    pub confidence: f64,
+}
+
+/// How a criterion came out.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
+pub enum Verdict {
+    /// Every judged floor's band lies within the limit (the strength target).
+    Pass,
+    /// Some floor's band lies wholly beyond it.
+    Fail,
+    /// Neither: more storms (or a certified answer) may decide.
+    Inconclusive,
+}
+
+/// A criterion's T-year level at every judged floor, from the same storms.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct LevelProfile {
+    pub floors: Vec<usize>,
+    /// The T-year level at each floor; none where the sampled storms do not reach so rare a level.
+    pub values: Vec<Option<f64>>,
+    /// Where the band's ends cross the level's probability.
+    pub lower: Vec<Option<f64>>,
+    pub upper: Vec<Option<f64>>,
+    /// The limit at each floor (SI).
+    pub limits: Vec<f64>,
+}
+
+/// A strength criterion's annual probability of exceeding its limit at its most probable floor,
+/// against ASCE 7's target.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct StrengthCheck {
+    pub risk_category: RiskCategory,
+    pub failure: FailureMode,
+    /// The floor of the largest annual probability.
+    pub floor: usize,
+    pub annual_probability: f64,
+    pub lower: f64,
+    pub upper: f64,
+    /// −Φ⁻¹ of the annual probability; none where it is 0 or 1.
+    pub beta: Option<f64>,
+    /// ASCE 7-16 Table 1.3-1's annual probability for the category and failure.
+    pub target_annual_probability: f64,
+    /// −Φ⁻¹ of the target (annual; the table's own indices are for 50 years).
+    pub target_beta: f64,
+    /// β − target β: positive where the building is more reliable than the target.
+    pub margin: Option<f64>,
+}
+
+/// How one criterion came out.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct CriterionCheck {
+    pub name: String,
+    pub response: ResponseKind,
+    pub statistic: Statistic,
+    /// The response's SI unit.
+    pub unit: String,
+    pub return_period_years: f64,
+    /// The floor of the largest utilisation.
+    pub governing_floor: usize,
+    /// The T-year level at the governing floor, with its band.
+    pub value: Option<f64>,
+    pub lower: Option<f64>,
+    pub upper: Option<f64>,
+    /// The limit at the governing floor (SI).
+    pub limit: f64,
+    /// value / limit at the governing floor; none where the level was not reached.
+    pub utilisation: Option<f64>,
+    /// Over every judged floor: `pass` where every upper end is within its limit, `fail` where
+    /// some lower end is beyond, else `inconclusive`; for a strength criterion the same of the
+    /// annual probability's band against the target.
+    pub verdict: Verdict,
+    pub profile: LevelProfile,
+    pub strength: Option<StrengthCheck>,
+}
+
+/// A serviceability check's answer.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct Serviceability {
+    /// The law of the annual maximum storm speed at the 10 m station.
+    pub climate: Marginal,
+    /// Storms run, each through every criterion and floor.
+    pub samples: usize,
+    pub strata: usize,
+    pub confidence: f64,
+    pub criteria: Vec<CriterionCheck>,
+    /// Storms whose free run diverged, counted as exceeding every level.
+    pub diverged_storms: usize,
+    #[serde(default)]
+    pub first_diverged: Vec<DivergedStorm>,
+    /// The climate's probability of storms too rare to be run; counted as exceeding.
+    pub unsampled_probability: f64,
+    /// The wind speeds of the calibration's experiments, lowest and highest (m/s).
+    pub calibrated_wind_range: [f64; 2],
+    /// The climate's probability of a speed outside them.
+    pub climate_beyond_calibrated_range: f64,
+}
+
+impl ServiceabilityOptions {
+    /// Checks everything but the sampling; errors name the field.
+    pub fn resolve(&self, study: &Study) -> Result<Vec<ResolvedCriterion>> {
+        check_samples(self.samples)?;
+        check_confidence(self.confidence)?;
+        if self.criteria.is_empty() || self.criteria.len() > MAX_CRITERIA {
+            return Err(Error::invalid("criteria", format!("give 1 to {MAX_CRITERIA} criteria")));
+        }
+        let resolved = self
+            .criteria
+            .iter()
+            .enumerate()
+            .map(|(i, c)| c.resolve(&study.structure, &format!("criteria[{i}]")))
+            .collect::<Result<Vec<_>>>()?;
+        pilot(&self.strata(), self.samples, PILOT_SHARE, "samples")?;
+        Ok(resolved)
+    }
+
+    /// Strata down to the rarest level asked: a criterion's 1/T or a strength target.
+    fn strata(&self) -> WindStrata {
+        let targets = self.criteria.iter().flat_map(|c| c.strength.map(|s| s.annual_probability()));
+        let smallest = self.criteria.iter().map(|c| 1.0 / c.return_period_years).chain(targets).fold(1e-4, f64::min);
+        WindStrata::new(&self.climate, smallest, MAX_SPEED)
+    }
+}
+
+/// The check of `options.criteria` on a metamodel under `options.climate`, every other input
+/// drawn from its law.
+pub fn metamodel_serviceability(
+    metamodel: &Metamodel,
+    study: &Study,
+    options: &ServiceabilityOptions,
+    observer: &dyn Observer,
+) -> Result<Serviceability> {
+    let resolved = options.resolve(study)?;
+    let calibrated = metamodel.calibrated_range(study, WIND_SPEED)?;
+    let (responses, columns) = columns_of(&resolved);
+    let strata = options.strata();
+    let rows = StormRows {
+        inputs: &study.inputs,
+        wind: study.inputs.index_of(WIND_SPEED)?,
+        climate: &options.climate,
+        strata: &strata,
+    };
+    let design = AnnualDesign { rows, samples: options.samples, calibrated };
+    let peaks_of = |rows: &[Vec<f64>], first: usize| {
+        let storms: Vec<usize> = (first..first + rows.len()).collect();
+        let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
+        peak_sets_at(metamodel, &draws, &responses, observer)
+    };
+    let aims = |pilot: &[StratifiedPeaks]| criteria_aims(&resolved, &columns, pilot, options.confidence);
+    let sample = design.draw(&mut rng_from_seed(options.seed), peaks_of, aims)?;
+    Ok(judge(&resolved, &columns, &sample, options, &strata, calibrated))
+}
+
+/// Every response the criteria judge, once each, and each criterion's columns among them.
+fn columns_of(resolved: &[ResolvedCriterion]) -> (Vec<Response>, Vec<Vec<usize>>) {
+    let mut responses: Vec<Response> = Vec::new();
+    let columns = resolved
+        .iter()
+        .map(|c| {
+            c.responses
+                .iter()
+                .map(|r| {
+                    responses.iter().position(|known| known == r).unwrap_or_else(|| {
+                        responses.push(*r);
+                        responses.len() - 1
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    (responses, columns)
+}
+
+/// What the allocation aims at: each criterion's T-year level at its governing floor in the pilot,
+/// and a strength criterion's limit at its most probable floor.
+fn criteria_aims(
+    resolved: &[ResolvedCriterion],
+    columns: &[Vec<usize>],
+    pilot: &[StratifiedPeaks],
+    confidence: f64,
+) -> Vec<Aim> {
+    let mut aims = Vec::new();
+    for (criterion, columns) in resolved.iter().zip(columns) {
+        let profile = profile(criterion, columns, pilot, confidence);
+        let governing = governing(&profile);
+        if let Some(level) = profile.values[governing] {
+            aims.push((columns[governing], level));
+        }
+        if criterion.criterion.strength.is_some() {
+            let floor = largest(&limit_exceedances(criterion, columns, pilot, confidence), |e| e.probability);
+            aims.push((columns[floor], criterion.limits[floor]));
+        }
+    }
+    aims
+}
+
+/// The T-year level of each of the criterion's floors.
+fn profile(
+    criterion: &ResolvedCriterion,
+    columns: &[usize],
+    sample: &[StratifiedPeaks],
+    confidence: f64,
+) -> LevelProfile {
+    let period = criterion.criterion.return_period_years;
+    let levels = columns.iter().map(|&c| {
+        let column = &sample[c];
+        return_level(&column.finite_peaks(), period, |x| column.exceedance(x, confidence))
+    });
+    let (mut values, mut lower, mut upper) = (Vec::new(), Vec::new(), Vec::new());
+    for level in levels {
+        values.push(level.value);
+        lower.push(level.lower);
+        upper.push(level.upper);
+    }
+    LevelProfile {
+        floors: criterion.responses.iter().filter_map(Response::floor).collect(),
+        values,
+        lower,
+        upper,
+        limits: criterion.limits.clone(),
+    }
+}
+
+/// The position of the largest utilisation (a level not reached counts as the largest).
+fn governing(profile: &LevelProfile) -> usize {
+    let utilisations: Vec<f64> =
+        profile.values.iter().zip(&profile.limits).map(|(v, limit)| v.map_or(f64::INFINITY, |v| v / limit)).collect();
+    largest(&utilisations, |u| *u)
+}
+
+/// The position of the largest `key` (the first of equals).
+fn largest<T>(items: &[T], key: impl Fn(&T) -> f64) -> usize {
+    (0..items.len()).fold(0, |best, i| if key(&items[i]) > key(&items[best]) { i } else { best })
+}
+
+/// The annual probability of each of the criterion's floors exceeding its limit.
+fn limit_exceedances(
+    criterion: &ResolvedCriterion,
+    columns: &[usize],
+    sample: &[StratifiedPeaks],
+    confidence: f64,
+) -> Vec<Estimate> {
+    columns.iter().zip(&criterion.limits).map(|(&c, &limit)| sample[c].exceedance(limit, confidence)).collect()
+}
+
+/// `pass` where every end that matters is within, `fail` where some is beyond.
+fn verdict(beyond_for_sure: bool, within_for_sure: bool) -> Verdict {
+    match (beyond_for_sure, within_for_sure) {
+        (true, _) => Verdict::Fail,
+        (false, true) => Verdict::Pass,
+        (false, false) => Verdict::Inconclusive,
+    }
+}
+
+fn judge(
+    resolved: &[ResolvedCriterion],
+    columns: &[Vec<usize>],
+    sample: &AnnualSample,
+    options: &ServiceabilityOptions,
+    strata: &WindStrata,
+    calibrated: [f64; 2],
+) -> Serviceability {
+    let confidence = options.confidence;
+    let criteria = resolved
+        .iter()
+        .zip(columns)
+        .map(|(criterion, columns)| {
+            let profile = profile(criterion, columns, &sample.columns, confidence);
+            let at = governing(&profile);
+            let limit = profile.limits[at];
+            let floors = 0..profile.floors.len();
+            let level_verdict = verdict(
+                floors.clone().any(|i| profile.lower[i].is_some_and(|x| x > profile.limits[i])),
+                floors.clone().all(|i| profile.upper[i].is_some_and(|x| x <= profile.limits[i])),
+            );
+            let (strength, verdict) = match criterion.criterion.strength {
+                Some(target) => {
+                    let exceedances = limit_exceedances(criterion, columns, &sample.columns, confidence);
+                    let worst = largest(&exceedances, |e| e.probability);
+                    let p = target.annual_probability();
+                    let verdict =
+                        verdict(exceedances.iter().any(|e| e.lower > p), exceedances.iter().all(|e| e.upper <= p));
+                    (Some(strength_check(target, profile.floors[worst], exceedances[worst])), verdict)
+                }
+                None => (None, level_verdict),
+            };
+            let c = &criterion.criterion;
+            CriterionCheck {
+                name: c.name.clone(),
+                response: c.response,
+                statistic: c.statistic,
+                unit: criterion.responses[0].unit().to_string(),
+                return_period_years: c.return_period_years,
+                governing_floor: profile.floors[at],
+                value: profile.values[at],
+                lower: profile.lower[at],
+                upper: profile.upper[at],
+                limit,
+                utilisation: profile.values[at].map(|v| v / limit),
+                verdict,
+                profile,
+                strength,
+            }
+        })
+        .collect();
+    Serviceability {
+        climate: options.climate,
+        samples: sample.storms,
+        strata: strata.count(),
+        confidence,
+        criteria,
+        diverged_storms: sample.diverged,
+        first_diverged: sample.first_diverged.clone(),
+        unsampled_probability: strata.unsampled(),
+        calibrated_wind_range: calibrated,
+        climate_beyond_calibrated_range: options.climate.cdf(calibrated[0]) + options.climate.survival(calibrated[1]),
+    }
+}
+
+fn strength_check(target: StrengthTarget, floor: usize, e: Estimate) -> StrengthCheck {
+    let beta = (e.probability > 0.0 && e.probability < 1.0).then(|| -Normal::standard().inverse_cdf(e.probability));
+    let target_beta = target.annual_beta();
+    StrengthCheck {
+        risk_category: target.risk_category,
+        failure: target.failure,
+        floor,
+        annual_probability: e.probability,
+        lower: e.lower,
+        upper: e.upper,
+        beta,
+        target_annual_probability: target.annual_probability(),
+        target_beta,
+        margin: beta.map(|b| b - target_beta),
+    }
+}
+
+impl Serviceability {
+    /// One row per criterion and floor: its T-year level with the band, the limit and the
+    /// utilisation, the governing floor marked, the criterion's verdict on every row.
+    pub fn csv(&self) -> String {
+        let mut out = String::from(
+            "criterion,response,statistic,unit,return_period_years,floor,value,lower,upper,limit,utilisation,governing,verdict\n",
+        );
+        let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
+        for c in &self.criteria {
+            let p = &c.profile;
+            for i in 0..p.floors.len() {
+                let row = [
+                    c.name.replace(',', ";"),
+                    c.response.name().to_string(),
+                    format!("{:?}", c.statistic).to_lowercase(),
+                    c.unit.clone(),
+                    c.return_period_years.to_string(),
+                    p.floors[i].to_string(),
+                    blank(p.values[i]),
+                    blank(p.lower[i]),
+                    blank(p.upper[i]),
+                    p.limits[i].to_string(),
+                    blank(p.values[i].map(|v| v / p.limits[i])),
+                    (p.floors[i] == c.governing_floor).to_string(),
+                    format!("{:?}", c.verdict).to_lowercase(),
+                ];
+                out += &row.join(",");
+                out.push('\n');
+            }
+        }
+        out
+    }
+}
