@@ -382,7 +382,17 @@ pub(super) mod tests {
         crate::uncertainty::simpson(integrand, -8.0, 8.0, 4000)
     }
 
-    fn toy_inputs() -> InputModel {
+    /// The exact level of annual probability `p` of [`lognormal_scatter_annual`], by bisection.
+    pub(in crate::analysis) fn lognormal_scatter_level(climate: &Marginal, sigma: f64, p: f64) -> f64 {
+        let (mut lo, mut hi) = (1.0, 200.0);
+        for _ in 0..60 {
+            let mid = 0.5 * (lo + hi);
+            if lognormal_scatter_annual(climate, sigma, mid) > p { lo = mid } else { hi = mid }
+        }
+        0.5 * (lo + hi)
+    }
+
+    pub(in crate::analysis) fn toy_inputs() -> InputModel {
         InputModel::new(vec![
             Input { name: "z".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },
             Input { name: WIND_SPEED.into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } },
@@ -418,14 +428,7 @@ pub(super) mod tests {
             certify: None,
         };
         // The exact level of each probability, by bisection on the quadrature.
-        let level = |p: f64| {
-            let (mut lo, mut hi) = (1.0, 200.0);
-            for _ in 0..60 {
-                let mid = 0.5 * (lo + hi);
-                if lognormal_scatter_annual(&climate, sigma, mid) > p { lo = mid } else { hi = mid }
-            }
-            0.5 * (lo + hi)
-        };
+        let level = |p: f64| lognormal_scatter_level(&climate, sigma, p);
         let levels: Vec<f64> = [1e-1, 1e-2, 1e-3, 1e-4, 1e-5].iter().map(|&p| level(p)).collect();
         options.thresholds = Some(levels.clone());
         let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma), not_paired).unwrap();

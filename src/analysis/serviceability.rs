@@ -21,7 +21,7 @@ use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::Study;
 use crate::surrogate::Metamodel;
-use crate::uncertainty::{Marginal, rng_from_seed};
+use crate::uncertainty::{InputModel, Marginal, rng_from_seed};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -172,23 +172,32 @@ pub fn metamodel_serviceability(
 ) -> Result<Serviceability> {
     let resolved = options.resolve(study)?;
     let calibrated = metamodel.calibrated_range(study, WIND_SPEED)?;
-    let (responses, columns) = columns_of(&resolved);
-    let strata = options.strata();
-    let rows = StormRows {
-        inputs: &study.inputs,
-        wind: study.inputs.index_of(WIND_SPEED)?,
-        climate: &options.climate,
-        strata: &strata,
-    };
-    let design = AnnualDesign { rows, samples: options.samples, calibrated };
-    let peaks_of = |rows: &[Vec<f64>], first: usize| {
+    let peaks_of = |responses: &[Response], rows: &[Vec<f64>], first: usize| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
         let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
-        peak_sets_at(metamodel, &draws, &responses, observer)
+        peak_sets_at(metamodel, &draws, responses, observer)
     };
-    let aims = |pilot: &[StratifiedPeaks]| criteria_aims(&resolved, &columns, pilot, options.confidence);
-    let sample = design.draw(&mut rng_from_seed(options.seed), peaks_of, aims)?;
-    Ok(judge(&resolved, &columns, &sample, options, &strata, calibrated))
+    serviceability_check(&study.inputs, &resolved, options, calibrated, peaks_of)
+}
+
+/// The check of the `resolved` criteria on storms drawn from `inputs` with the wind speed the
+/// climate's: `peaks_of(responses, rows, first)` answers `[row][response]` (`first`: the rows run
+/// before, so that every row gets its own storm).
+pub fn serviceability_check(
+    inputs: &InputModel,
+    resolved: &[ResolvedCriterion],
+    options: &ServiceabilityOptions,
+    calibrated: [f64; 2],
+    mut peaks_of: impl FnMut(&[Response], &[Vec<f64>], usize) -> Result<Vec<Vec<f64>>>,
+) -> Result<Serviceability> {
+    let (responses, columns) = columns_of(resolved);
+    let strata = options.strata();
+    let rows = StormRows { inputs, wind: inputs.index_of(WIND_SPEED)?, climate: &options.climate, strata: &strata };
+    let design = AnnualDesign { rows, samples: options.samples, calibrated };
+    let aims = |pilot: &[StratifiedPeaks]| criteria_aims(resolved, &columns, pilot, options.confidence);
+    let sample =
+        design.draw(&mut rng_from_seed(options.seed), |rows, first| peaks_of(&responses, rows, first), aims)?;
+    Ok(judge(resolved, &columns, &sample, options, &strata, calibrated))
 }
 
 /// Every response the criteria judge, once each, and each criterion's columns among them.
@@ -405,5 +414,103 @@ impl Serviceability {
             }
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::analysis::annual_probability_of_period;
+    use crate::analysis::hazard::tests::{lognormal_scatter_annual, lognormal_scatter_level, toy_inputs};
+
+    /// A response at floor f of f·scale·v·exp(σz): its T-year level is exactly f·scale times the
+    /// lognormal scatter's ([`lognormal_scatter_level`], an independent quadrature).
+    fn toy_peaks(responses: &[Response], rows: &[Vec<f64>]) -> Vec<Vec<f64>> {
+        let scale = |r: &Response| match r {
+            Response::Drift { floor } => *floor as f64 * 1e-3,
+            Response::Acceleration { floor } => *floor as f64 * 1e-2,
+            other => unreachable!("{other:?}"),
+        };
+        rows.iter().map(|row| responses.iter().map(|r| scale(r) * row[1] * (0.15 * row[0]).exp()).collect()).collect()
+    }
+
+    fn criterion(name: &str, response: ResponseKind, floors: [usize; 2], limit: f64) -> Criterion {
+        Criterion {
+            name: name.into(),
+            response,
+            statistic: Statistic::Peak,
+            return_period_years: 10.0,
+            limit: Some(limit),
+            limit_per_storey_height: None,
+            floors: Some(floors),
+            strength: None,
+        }
+    }
+
+    /// Levels against the quadrature, verdicts on each side of the limit and at it, the governing
+    /// floor, the same storms for every floor (levels in the floors' exact ratio), and a strength
+    /// criterion's annual probability against the quadrature and ASCE 7's target.
+    #[test]
+    fn levels_verdicts_and_reliability_of_a_known_law() {
+        let climate = Marginal::Gumbel { location: 22.0, scale: 2.2 };
+        let x10 = lognormal_scatter_level(&climate, 0.15, annual_probability_of_period(10.0));
+        let x1000 = lognormal_scatter_level(&climate, 0.15, 1e-3);
+        let mut strength = criterion("strength", ResponseKind::Drift, [3, 3], 3e-3 * x1000);
+        strength.strength = Some(StrengthTarget { risk_category: RiskCategory::I, failure: FailureMode::NotSudden });
+        let options = ServiceabilityOptions {
+            climate,
+            criteria: vec![
+                criterion("within", ResponseKind::Drift, [1, 3], 2.0 * 3e-3 * x10),
+                criterion("beyond", ResponseKind::Acceleration, [2, 2], 0.5 * 2e-2 * x10),
+                criterion("at", ResponseKind::Drift, [1, 3], 3e-3 * x10),
+                strength,
+            ],
+            samples: 20_000,
+            seed: 7,
+            confidence: 0.95,
+        };
+        let structure = crate::study::Study::preset("frame40-kn").unwrap().structure;
+        let resolved: Vec<ResolvedCriterion> =
+            options.criteria.iter().map(|c| c.resolve(&structure, "criteria[0]").unwrap()).collect();
+        let peaks_of = |responses: &[Response], rows: &[Vec<f64>], _| Ok(toy_peaks(responses, rows));
+        let check = serviceability_check(&toy_inputs(), &resolved, &options, [15.0, 45.0], peaks_of).unwrap();
+        let [within, beyond, at, strength] = &check.criteria[..] else { panic!("four criteria") };
+        for (i, floor) in [1, 2, 3].into_iter().enumerate() {
+            let exact = floor as f64 * 1e-3 * x10;
+            let (lo, hi) = (within.profile.lower[i].unwrap(), within.profile.upper[i].unwrap());
+            assert!(lo <= exact && exact <= hi, "floor {floor}: {exact} not in [{lo}, {hi}]");
+            let ratio = within.profile.values[i].unwrap() / within.profile.values[0].unwrap();
+            assert!((ratio - floor as f64).abs() < 1e-12, "floor {floor}: {ratio}");
+        }
+        assert_eq!((within.governing_floor, within.verdict), (3, Verdict::Pass));
+        assert!((within.utilisation.unwrap() - 0.5).abs() < 0.02, "{:?}", within.utilisation);
+        assert_eq!((beyond.governing_floor, beyond.verdict), (2, Verdict::Fail));
+        assert_eq!(at.verdict, Verdict::Inconclusive, "{at:?}");
+        assert_eq!(at.profile.values, within.profile.values, "one column per response, shared");
+        let s = strength.strength.as_ref().unwrap();
+        let exact = lognormal_scatter_annual(&climate, 0.15, x1000);
+        assert!(s.lower <= exact && exact <= s.upper, "{exact} not in [{}, {}]", s.lower, s.upper);
+        assert_eq!((s.target_annual_probability, strength.verdict), (1.25e-4, Verdict::Fail));
+        assert!(s.margin.unwrap() < 0.0 && (s.target_beta - 3.662).abs() < 1e-3, "{s:?}");
+        assert!(check.samples <= 20_000 && check.diverged_storms == 0);
+    }
+
+    #[test]
+    fn criteria_are_checked_naming_the_field() {
+        let structure = crate::study::Study::preset("frame40-kn").unwrap().structure;
+        let base = criterion("c", ResponseKind::Drift, [1, 40], 0.01);
+        let refused = |c: Criterion| c.resolve(&structure, "criteria[1]").unwrap_err().to_string();
+        assert!(refused(Criterion { floors: Some([0, 3]), ..base.clone() }).contains("criteria[1].floors"));
+        assert!(refused(Criterion { floors: Some([3, 41]), ..base.clone() }).contains("criteria[1].floors"));
+        assert!(refused(Criterion { return_period_years: 0.5, ..base.clone() }).contains("return_period_years"));
+        assert!(refused(Criterion { limit: Some(f64::NAN), ..base.clone() }).contains("criteria[1].limit"));
+        assert!(refused(Criterion { limit: None, ..base.clone() }).contains("criteria[1].limit"));
+        assert!(refused(Criterion { statistic: Statistic::Rms, ..base.clone() }).contains("statistic"));
+        let ratio = Criterion { limit: None, limit_per_storey_height: Some(0.0025), ..base.clone() };
+        let resolved = ratio.resolve(&structure, "c").unwrap();
+        let heights = structure.storey_heights();
+        assert!((resolved.limits[0] - heights[0] / 400.0).abs() < 1e-12 && resolved.limits.len() == 40);
+        let accel = Criterion { response: ResponseKind::Acceleration, ..ratio };
+        assert!(refused(accel).contains("limit_per_storey_height"));
     }
 }

@@ -3,13 +3,15 @@
 //! requests as operations.
 
 use super::ServeArgs;
+use super::checks::{ServiceabilityAnswer, ServiceabilityRequest, SweepAnswer, SweepRequest};
 use super::exceedance::check_reference_storm_budget;
 use super::rendering::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
     CertifyOptions, ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions,
     ReferenceRunner, Response, ResponseKind, ResponseName, Sampling, Sensitivity, check_confidence, climate_or_own,
-    fragility_svg, hazard_svg, metamodel_fragility, metamodel_hazard, metamodel_sensitivity,
+    fragility_svg, hazard_svg, metamodel_fragility, metamodel_hazard, metamodel_sensitivity, metamodel_serviceability,
+    metamodel_sweep, serviceability_svg, sweep_svg,
 };
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -209,6 +211,8 @@ pub enum AnalysisRequest {
     Hazard(HazardRequest),
     Fragility(FragilityRequest),
     Sensitivity(SensitivityRequest),
+    Serviceability(ServiceabilityRequest),
+    Sweep(SweepRequest),
 }
 
 /// A large analysis request as queued.
@@ -248,13 +252,15 @@ pub struct SensitivityAnswer {
     pub metamodel_id: String,
 }
 
-/// What an analysis answers.
+/// What an analysis answers (a serviceability check or a sweep has no one response).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, ToSchema)]
 #[serde(untagged)]
 pub enum AnalysisAnswer {
     Hazard(Box<HazardAnswer>),
     Fragility(Box<FragilityAnswer>),
     Sensitivity(Box<SensitivityAnswer>),
+    Serviceability(Box<ServiceabilityAnswer>),
+    Sweep(Box<SweepAnswer>),
 }
 
 impl AnalysisRequest {
@@ -267,6 +273,9 @@ impl AnalysisRequest {
                 let random = study.inputs.inputs.iter().filter(|i| !matches!(i.marginal, Marginal::Constant { .. }));
                 r.samples.saturating_mul(random.count() + 3)
             }
+            AnalysisRequest::Serviceability(r) => r.samples,
+            // No value is refused by the sweep's own check, naming `values`.
+            AnalysisRequest::Sweep(r) => r.samples.saturating_mul(r.values.len().max(1)),
         }
     }
 
@@ -277,18 +286,21 @@ impl AnalysisRequest {
                 r.certify.map_or(0, |c| c.reference_storms.saturating_mul(r.wind_speeds.len()))
             }
             AnalysisRequest::Hazard(r) => r.certify.map_or(0, |c| c.reference_storms),
-            AnalysisRequest::Sensitivity(_) => 0,
+            AnalysisRequest::Sensitivity(_) | AnalysisRequest::Serviceability(_) | AnalysisRequest::Sweep(_) => 0,
         }
     }
 
-    /// The response the request names, checked against the study's structure.
-    fn response(&self, study: &Study) -> Result<Response> {
+    /// The one response the request names, checked against the study's structure (a
+    /// serviceability check names its responses in its criteria: none).
+    fn response(&self, study: &Study) -> Result<Option<Response>> {
         let (floor, group, kind) = match self {
             AnalysisRequest::Hazard(r) => (r.floor, r.group, r.response),
             AnalysisRequest::Fragility(r) => (r.floor, r.group, r.response),
             AnalysisRequest::Sensitivity(r) => (r.floor, r.group, r.response),
+            AnalysisRequest::Sweep(r) => (r.floor, r.group, r.response),
+            AnalysisRequest::Serviceability(_) => return Ok(None),
         };
-        kind.located(floor, group, &study.structure)
+        kind.located(floor, group, &study.structure).map(Some)
     }
 
     /// The checks that need the study but no sampling; errors name the field.
@@ -307,6 +319,8 @@ impl AnalysisRequest {
             AnalysisRequest::Fragility(r) => r.options()?.check(),
             AnalysisRequest::Sensitivity(r) if r.samples < 10 => Err(Error::invalid("samples", "must be at least 10")),
             AnalysisRequest::Sensitivity(r) => check_confidence(r.confidence),
+            AnalysisRequest::Serviceability(r) => r.options(study).map(drop),
+            AnalysisRequest::Sweep(r) => r.options(study).map(drop),
         }
     }
 
@@ -321,21 +335,34 @@ impl AnalysisRequest {
         observer: &dyn Observer,
     ) -> Result<AnalysisAnswer> {
         let metamodel_id = metamodel_id.to_string();
-        let response = self.response(study)?;
+        let located = self.response(study)?;
+        let response = || located.expect("every request but a serviceability check names one response");
         Ok(match self {
             AnalysisRequest::Hazard(r) => {
                 let options = r.options(study)?;
-                let curve = metamodel_hazard(metamodel, study, response, &options, reference, observer)?;
-                AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response, metamodel_id }))
+                let curve = metamodel_hazard(metamodel, study, response(), &options, reference, observer)?;
+                AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response: response(), metamodel_id }))
             }
             AnalysisRequest::Fragility(r) => {
-                let fragility = metamodel_fragility(metamodel, study, response, &r.options()?, reference, observer)?;
-                AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response, metamodel_id }))
+                let fragility = metamodel_fragility(metamodel, study, response(), &r.options()?, reference, observer)?;
+                AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response: response(), metamodel_id }))
             }
             AnalysisRequest::Sensitivity(r) => {
                 let sensitivity =
-                    metamodel_sensitivity(metamodel, study, response, r.samples, r.seed, r.confidence, observer)?;
-                AnalysisAnswer::Sensitivity(Box::new(SensitivityAnswer { sensitivity, response, metamodel_id }))
+                    metamodel_sensitivity(metamodel, study, response(), r.samples, r.seed, r.confidence, observer)?;
+                AnalysisAnswer::Sensitivity(Box::new(SensitivityAnswer {
+                    sensitivity,
+                    response: response(),
+                    metamodel_id,
+                }))
+            }
+            AnalysisRequest::Serviceability(r) => {
+                let check = metamodel_serviceability(metamodel, study, &r.options(study)?, observer)?;
+                AnalysisAnswer::Serviceability(Box::new(ServiceabilityAnswer { check, metamodel_id }))
+            }
+            AnalysisRequest::Sweep(r) => {
+                let sweep = metamodel_sweep(metamodel, study, response(), &r.options(study)?, observer)?;
+                AnalysisAnswer::Sweep(Box::new(SweepAnswer { sweep, response: response(), metamodel_id }))
             }
         })
     }
@@ -353,6 +380,14 @@ impl AnalysisAnswer {
             ),
             (AnalysisAnswer::Fragility(a), Rendering::Svg) => {
                 ("image/svg+xml", fragility_svg(&a.fragility, &a.response.per_storm()))
+            }
+            (AnalysisAnswer::Serviceability(a), Rendering::Csv) => ("text/csv", a.check.csv()),
+            (AnalysisAnswer::Serviceability(a), Rendering::Svg) => ("image/svg+xml", serviceability_svg(&a.check)),
+            (AnalysisAnswer::Sweep(a), Rendering::Csv) => ("text/csv", a.sweep.csv(a.response.unit_tag())),
+            (AnalysisAnswer::Sweep(a), Rendering::Svg) => {
+                let label =
+                    format!("{}-year {} ({})", a.sweep.return_period_years, a.response.per_storm(), a.response.unit());
+                ("image/svg+xml", sweep_svg(&a.sweep, &label, None))
             }
             _ => ("application/json", serde_json::to_string(self).expect("an answer serialises")),
         }

@@ -126,7 +126,7 @@ async fn prepare(
             })
             .await
         }
-        "hazard" | "fragility" | "sensitivity" => {
+        "hazard" | "fragility" | "sensitivity" | "serviceability" | "sweep" => {
             let job: AnalysisJob = parse(request)?;
             let reference = reference_tasks(state, id, owner, &job.metamodel_id);
             let metamodel_id = job.metamodel_id.clone();

@@ -3,6 +3,7 @@
 
 mod analyses;
 mod cache;
+mod checks;
 mod config;
 mod demands;
 mod error;

@@ -574,6 +574,8 @@ async fn provoke(app: &TestApp, ids: &Ids, method: &str, template: &str, status:
         "/v1/metamodels/{id}/fragility" => json!({"thresholds": [0.01], "wind_speeds": [29, 31], "samples": 10}),
         "/v1/metamodels/{id}/sensitivity" => json!({"samples": 10, "seed": 2}),
         "/v1/metamodels/{id}/demands" => json!({"wind_speed": 40, "samples": 5}),
+        "/v1/metamodels/{id}/serviceability" => json!({"criteria": ["nbcc-office"], "samples": 60}),
+        "/v1/metamodels/{id}/sweep" => json!({"input": "damper_c4", "values": [0, 50000], "samples": 60}),
         _ => json!({}),
     };
     let invalid_body = match template {
@@ -595,7 +597,9 @@ async fn provoke(app: &TestApp, ids: &Ids, method: &str, template: &str, status:
         422 if has_body => request("").json(&invalid_body),
         422 => request("?limit=0"),
         202 | 500 | 503
-            if ["/exceedance", "/hazard", "/fragility", "/sensitivity"].iter().any(|e| template.ends_with(e)) =>
+            if ["/exceedance", "/hazard", "/fragility", "/sensitivity", "/serviceability", "/sweep"]
+                .iter()
+                .any(|e| template.ends_with(e)) =>
         {
             request("").header("prefer", "respond-async").json(&valid_body)
         }

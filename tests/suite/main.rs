@@ -11,6 +11,7 @@ mod browser;
 mod cancellation;
 mod certify;
 mod cli;
+mod design;
 mod dynamics;
 mod edge;
 mod metamodel;

@@ -32,6 +32,7 @@ pub enum Statistic {
 #[serde(deny_unknown_fields)]
 pub struct Criterion {
     /// The criterion's name in the answer (1 to 64 characters).
+    #[cfg_attr(feature = "openapi", schema(min_length = 1, max_length = 64))]
     pub name: String,
     /// `displacement`, `drift`, `acceleration`, `damper_force` or `damper_stroke` (an RMS
     /// acceleration is `acceleration` with `statistic` `rms`).
@@ -40,18 +41,22 @@ pub struct Criterion {
     pub statistic: Statistic,
     /// The return period (years, from 1 to 10⁶) whose level is judged: the level exceeded in a year
     /// with probability 1 − exp(−1/T).
+    #[cfg_attr(feature = "openapi", schema(minimum = 1, maximum = 1000000))]
     pub return_period_years: f64,
     /// The limit in SI: m/s² for accelerations, m for displacements, drifts and strokes, N for
     /// damper forces. Give this or `limit_per_storey_height`.
     #[serde(default)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 1e9))]
     pub limit: Option<f64>,
     /// For drift: the limit as a fraction of each storey's height (1/400 = 0.0025), instead of
     /// `limit`.
     #[serde(default)]
+    #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 1))]
     pub limit_per_storey_height: Option<f64>,
     /// The lowest and highest floors judged (1-based, inclusive); every floor where the response
     /// exists when absent.
     #[serde(default)]
+    #[cfg_attr(feature = "openapi", schema(min_items = 2, max_items = 2))]
     pub floors: Option<[usize; 2]>,
     /// Judge the annual probability of exceeding the limit against ASCE 7's target reliability
     /// instead of the T-year level against the limit.

@@ -10,6 +10,7 @@ use crate::service::AppState;
 use crate::service::analyses::{
     AnalysisAnswer, AnalysisJob, AnalysisRequest, FragilityRequest, HazardRequest, SensitivityRequest,
 };
+use crate::service::checks::{ServiceabilityRequest, SweepRequest};
 use crate::service::error::ApiError;
 use axum::extract::{Path, State};
 use axum::http::HeaderMap;
@@ -18,7 +19,12 @@ use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 
 pub fn router() -> OpenApiRouter<AppState> {
-    OpenApiRouter::new().routes(routes!(hazard)).routes(routes!(fragility)).routes(routes!(sensitivity))
+    OpenApiRouter::new()
+        .routes(routes!(hazard))
+        .routes(routes!(fragility))
+        .routes(routes!(sensitivity))
+        .routes(routes!(serviceability))
+        .routes(routes!(sweep))
 }
 
 /// Checks a request against the stored study and answers it or queues it.
@@ -41,6 +47,8 @@ async fn analyse(
                 AnalysisRequest::Hazard(_) => OperationKind::Hazard,
                 AnalysisRequest::Fragility(_) => OperationKind::Fragility,
                 AnalysisRequest::Sensitivity(_) => OperationKind::Sensitivity,
+                AnalysisRequest::Serviceability(_) => OperationKind::Serviceability,
+                AnalysisRequest::Sweep(_) => OperationKind::Sweep,
             },
             job: serde_json::to_string(&AnalysisJob { metamodel_id: id, request }).expect("a job serialises"),
         }
@@ -125,4 +133,61 @@ async fn sensitivity(
     ApiJson(request): ApiJson<SensitivityRequest>,
 ) -> Result<HttpResponse, ApiError> {
     analyse(state, id, headers, "sensitivity", AnalysisRequest::Sensitivity(request)).await
+}
+
+/// Criteria of comfort, drift and strength judged together under a site's climate: for each, the
+/// T-year level at every judged floor from the same storms, the governing floor, the band, the
+/// utilisation and a verdict (`pass` where every band's upper end is within the limit, `fail`
+/// where some lower end is beyond); a strength criterion's annual probability and β against
+/// ASCE 7's target. JSON, CSV or SVG (the profiles over their limits) by `Accept`; large requests
+/// run as an operation.
+#[utoipa::path(post, path = "/v1/metamodels/{id}/serviceability", tag = "analyses",
+    request_body = ServiceabilityRequest,
+    params(
+        ("id" = String, Path, description = "Metamodel id"),
+        ("Prefer" = Option<String>, Header, description = "`respond-async` to run the request as an operation"),
+        ("Idempotency-Key" = Option<String>, Header, pattern = "^[!-~]{1,255}$", description = "Makes a retry of an asynchronous request return the same operation"),
+    ),
+    responses(
+        (status = 200, description = "The verdicts", content(
+            (AnalysisAnswer = "application/json"),
+            (String = "text/csv", example = "criterion,response,statistic,unit,return_period_years,floor,value,lower,upper,limit,utilisation,governing,verdict\nnbcc-office,acceleration,peak,m/s²,10,40,0.2,0.19,0.21,0.245,0.82,true,pass\n"),
+            (String = "image/svg+xml"),
+        )),
+        SamplingResponses,
+    ))]
+async fn serviceability(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    ApiJson(request): ApiJson<ServiceabilityRequest>,
+) -> Result<HttpResponse, ApiError> {
+    analyse(state, id, headers, "serviceability", AnalysisRequest::Serviceability(request)).await
+}
+
+/// The T-year level of a response with one input held at each of several values, every other input
+/// random and the same storms at every value: how a damper is sized against a limit. JSON, CSV or
+/// SVG by `Accept`; large requests run as an operation.
+#[utoipa::path(post, path = "/v1/metamodels/{id}/sweep", tag = "analyses",
+    request_body = SweepRequest,
+    params(
+        ("id" = String, Path, description = "Metamodel id"),
+        ("Prefer" = Option<String>, Header, description = "`respond-async` to run the request as an operation"),
+        ("Idempotency-Key" = Option<String>, Header, pattern = "^[!-~]{1,255}$", description = "Makes a retry of an asynchronous request return the same operation"),
+    ),
+    responses(
+        (status = 200, description = "The level at each value", content(
+            (AnalysisAnswer = "application/json"),
+            (String = "text/csv", example = "damper_c4,level_m_s2,lower,upper\n0,0.41,0.40,0.42\n"),
+            (String = "image/svg+xml"),
+        )),
+        SamplingResponses,
+    ))]
+async fn sweep(
+    State(state): State<AppState>,
+    Path(id): Path<String>,
+    headers: HeaderMap,
+    ApiJson(request): ApiJson<SweepRequest>,
+) -> Result<HttpResponse, ApiError> {
+    analyse(state, id, headers, "sweep", AnalysisRequest::Sweep(request)).await
 }

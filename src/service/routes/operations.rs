@@ -40,6 +40,8 @@ pub enum OperationKind {
     Hazard,
     Fragility,
     Sensitivity,
+    Serviceability,
+    Sweep,
 }
 
 impl OperationKind {
@@ -51,6 +53,8 @@ impl OperationKind {
             OperationKind::Hazard => "hazard",
             OperationKind::Fragility => "fragility",
             OperationKind::Sensitivity => "sensitivity",
+            OperationKind::Serviceability => "serviceability",
+            OperationKind::Sweep => "sweep",
         }
     }
 }
@@ -125,9 +129,14 @@ pub fn operation(row: &JobRow) -> Result<Operation, ApiError> {
         (None, _) | (Some(_), OperationKind::Calibration) => None,
         (Some(text), OperationKind::Validation) => Some(OperationResult::Validation(stored(text)?)),
         (Some(text), OperationKind::Exceedance) => Some(OperationResult::Exceedance(stored(text)?)),
-        (Some(text), OperationKind::Hazard | OperationKind::Fragility | OperationKind::Sensitivity) => {
-            Some(OperationResult::Analysis(stored(text)?))
-        }
+        (
+            Some(text),
+            OperationKind::Hazard
+            | OperationKind::Fragility
+            | OperationKind::Sensitivity
+            | OperationKind::Serviceability
+            | OperationKind::Sweep,
+        ) => Some(OperationResult::Analysis(stored(text)?)),
     };
     Ok(Operation {
         id: row.id.clone(),
