@@ -2,12 +2,14 @@
 //! honest: a full calibration and its stages, the per-sample stages of one full-size storm (wind by
 //! both paths, both reference integrators, the metamodel's free run on the same storm), and an
 //! exceedance curve, roof-acceleration and RMS-acceleration curves, drift and acceleration profiles of every floor, an
-//! annual curve with ten return levels and Sobol indices end to end. Speed is measured here and in
+//! annual curve with ten return levels, a serviceability check of the built-in criteria, a sweep of a
+//! damper coefficient and Sobol indices end to end. Speed is measured here and in
 //! `benches/`, never asserted in a test.
 
 use crate::analysis::{
-    HazardOptions, OnThisMachine, Response, ResponseKind, Sampling, WIND_SPEED, automatic_thresholds, exceedance_curve,
-    metamodel_hazard, metamodel_peaks, metamodel_profiles, metamodel_sensitivity,
+    BUILT_IN, HazardOptions, OnThisMachine, Response, ResponseKind, Sampling, ServiceabilityOptions, SweepOptions,
+    WIND_SPEED, automatic_thresholds, built_in, exceedance_curve, metamodel_hazard, metamodel_peaks,
+    metamodel_profiles, metamodel_sensitivity, metamodel_serviceability, metamodel_sweep,
 };
 use crate::dynamics::{integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
@@ -177,6 +179,47 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         hazard_seconds,
         repetitions.min(3),
     ));
+    let climate = *study.inputs.marginal(WIND_SPEED)?;
+    let built_ins = BUILT_IN.iter().map(|name| built_in(name, study.structure.floors())).collect::<Result<Vec<_>>>()?;
+    let check =
+        ServiceabilityOptions { climate, criteria: built_ins, samples: args.hazard_samples, seed: 1, confidence: 0.95 };
+    let serviceability = time(repetitions.min(3), |_| metamodel_serviceability(&metamodel, &study, &check, &Silent))?;
+    rows.push(row(
+        format!(
+            "serviceability check, {} built-in criteria ({}), {} storms (all threads)",
+            BUILT_IN.len(),
+            BUILT_IN.join(", "),
+            args.hazard_samples
+        ),
+        serviceability,
+        repetitions.min(3),
+    ));
+    // The top damper group's coefficient over its calibrated range, where a structure has dampers.
+    let groups = study.structure.damper_groups();
+    if groups > 0 {
+        let input = format!("damper_c{groups}");
+        let [low, high] = metamodel.calibrated_range(&study, &input)?;
+        let sweep = SweepOptions {
+            values: (0..5).map(|k| low + (high - low) * k as f64 / 4.0).collect(),
+            input,
+            climate,
+            return_period_years: 10.0,
+            samples: args.hazard_samples / 2,
+            seed: 1,
+            confidence: 0.95,
+        };
+        let roof_acceleration = Response::Acceleration { floor: study.structure.floors() };
+        let swept =
+            time(repetitions.min(3), |_| metamodel_sweep(&metamodel, &study, roof_acceleration, &sweep, &Silent))?;
+        rows.push(row(
+            format!(
+                "sweep of {}, 5 values x {} storms, 10-year roof acceleration (all threads)",
+                sweep.input, sweep.samples
+            ),
+            swept,
+            repetitions.min(3),
+        ));
+    }
     let n = args.sensitivity_samples;
     let sobol = time(repetitions.min(3), |r| metamodel_sensitivity(&metamodel, &study, roof, n, 1 + r, 0.95, &Silent))?;
     rows.push(row(

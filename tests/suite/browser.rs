@@ -479,6 +479,46 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     let certified = "document.querySelectorAll('#fragility-chart polyline[data-series]').length === 4 \
                      && document.querySelector('#fragility-chart svg').textContent.includes('metamodel alone')";
     wait_until(&browser, certified, long).await;
+    // The serviceability check: a typed criterion that is not JSON is named before sending, one
+    // the server refuses is named with its field; built-ins and a typed RMS criterion in milli-g
+    // answer a table of verdicts and the profiles over their limits (three criteria and the limit).
+    set_value(&browser, "#serviceability-samples", "400").await;
+    set_value(&browser, "#serviceability-criteria", "[{").await;
+    click(&browser, "#serviceability-form button[type=submit]").await;
+    wait_until(
+        &browser,
+        "document.querySelector('#serviceability-criteria-error').textContent.includes('JSON')",
+        short,
+    )
+    .await;
+    let typed = r#"[{"name": "roof rms", "response": "acceleration", "statistic": "rms", "return_period_years": 1, "limit_milli_g": 5, "floors": [38, 40]}]"#;
+    set_value(&browser, "#serviceability-criteria", &typed.replace("[38, 40]", "[0, 40]")).await;
+    click(&browser, "#serviceability-form button[type=submit]").await;
+    let refused = "document.querySelector('#serviceability-criteria-error').textContent.includes('criteria[0].floors')";
+    wait_until(&browser, refused, long).await;
+    set_value(&browser, "#serviceability-criteria", typed).await;
+    click(&browser, "#serviceability-form button[type=submit]").await;
+    wait_until(&browser, "document.querySelectorAll('#serviceability-table tbody tr').length === 3", long).await;
+    let verdicts =
+        "return [...document.querySelectorAll('#serviceability-table tbody tr')].map((r) => r.dataset.verdict);";
+    let verdicts = browser.execute(verdicts, vec![]).await.unwrap();
+    assert!(
+        verdicts.as_array().unwrap().iter().all(|v| ["pass", "fail", "inconclusive"].contains(&v.as_str().unwrap())),
+        "{verdicts}"
+    );
+    let rms_row = text_of(&browser, "#serviceability-table tbody tr:last-child").await;
+    assert!(rms_row.contains("roof rms") && rms_row.contains("0.04903"), "5 milli-g in m/s²: {rms_row}");
+    let profiles = "return document.querySelectorAll('#serviceability-chart polyline[data-series]').length;";
+    assert_eq!(browser.execute(profiles, vec![]).await.unwrap(), json!(4));
+    // The sweep of a damper group's coefficient: one point per value.
+    set_value(&browser, "#sweep-samples", "200").await;
+    set_value(&browser, "#sweep-values", "0, 50000, 100000").await;
+    browser.execute("document.querySelector('#sweep-input').value = 'damper_c4';", vec![]).await.unwrap();
+    click(&browser, "#sweep-form button[type=submit]").await;
+    wait_until(&browser, "document.querySelectorAll('#sweep-chart circle').length === 3", long).await;
+    set_value(&browser, "#sweep-values", "-5").await;
+    click(&browser, "#sweep-form button[type=submit]").await;
+    wait_until(&browser, "document.querySelector('#sweep-values-error').textContent.includes('support')", long).await;
     set_value(&browser, "#sensitivity-samples", "64").await;
     click(&browser, "#sensitivity-form button[type=submit]").await;
     wait_until(&browser, "document.querySelectorAll('#sensitivity-table tbody tr').length >= 5", long).await;

@@ -118,13 +118,13 @@ function heldInputs(form) {
   return fixed;
 }
 
-function describeMarginal(marginal) {
+export function describeMarginal(marginal) {
   const parameters = Object.entries(marginal).filter(([key]) => key !== 'distribution').map(([key, value]) => `${key} ${format(value)}`);
   return `${marginal.distribution} (${parameters.join(', ')})`;
 }
 
 /** The request fields shared by the analyses, or null after showing what is wrong. */
-function analysisRequest(form, prefix) {
+export function analysisRequest(form, prefix) {
   clearErrors(form);
   if (!session.current) {
     $(`#${prefix}-error`).textContent = 'Choose a metamodel first (under Metamodels).';
@@ -143,14 +143,14 @@ function analysisRequest(form, prefix) {
   return request;
 }
 
-function responseLabel(answer) {
+export function responseLabel(answer) {
   const r = answer.response;
   const where = r.group ? `damper group ${r.group}` : `floor ${r.floor}`;
   return `${r.kind.replace('_', ' ')}, ${where}`;
 }
 
 /** Starts an analysis as an operation and gives its answer. */
-async function runAnalysis(form, prefix, path, request) {
+export async function runAnalysis(form, prefix, path, request) {
   const id = session.current.id;
   const done = await throughOperation(form, prefix, () => api('POST', `/v1/metamodels/${id}/${path}`, request, { Prefer: 'respond-async' }));
   return done && done.result;
@@ -265,7 +265,7 @@ function hazardSeries(answer) {
 }
 
 /** A diverged storm with the inputs it was run with. */
-function describeDiverged(storm) {
+export function describeDiverged(storm) {
   return `storm ${storm.storm} (${Object.entries(storm.inputs).map(([name, value]) => `${name} = ${format(value)}`).join(', ')})`;
 }
 
@@ -275,10 +275,7 @@ function describeDiverged(storm) {
  */
 function hazardFields(form, request) {
   const errors = [];
-  const speeds = ['50', '700'].map((years) => [years, numberField($(`#hazard-speed-${years}`), errors, false)]);
-  const given = speeds.filter(([, speed]) => speed !== undefined);
-  if (given.length === 1) errors.push({ field: 'climate', detail: 'give both speeds, or neither for the metamodel\'s wind law' });
-  if (given.length === 2) request.climate = { return_period_speeds: Object.fromEntries(given) };
+  siteClimate('hazard', request, errors);
   const limit = numberField($('#hazard-limit'), errors, false);
   if (limit !== undefined) request.limit = limit;
   if (errors.length) {
@@ -286,6 +283,17 @@ function hazardFields(form, request) {
     return false;
   }
   return true;
+}
+
+/**
+ * The site climate of form `prefix` into `request`: a Gumbel law through its 50- and 700-year
+ * speeds (both or neither); what is wrong into `errors`.
+ */
+export function siteClimate(prefix, request, errors) {
+  const speeds = ['50', '700'].map((years) => [years, numberField($(`#${prefix}-speed-${years}`), errors, false)]);
+  const given = speeds.filter(([, speed]) => speed !== undefined);
+  if (given.length === 1) errors.push({ field: 'climate', detail: 'give both speeds, or neither for the metamodel\'s wind law' });
+  if (given.length === 2) request.climate = { return_period_speeds: Object.fromEntries(given) };
 }
 
 export async function fragility(event) {

@@ -5,6 +5,7 @@
 // rest through them.
 import { drawExceedance, explore, fragility, hazard, sensitivity, setUpAnalysisForms } from './analyses.js';
 import { $, session, setUpKey } from './client.js';
+import { serviceability, sweep } from './design.js';
 import { calibrate, deleteMetamodel, loadMetamodels, loadPresets, showPreset, validate } from './metamodels.js';
 import { loadOperations } from './operations.js';
 
@@ -49,6 +50,8 @@ function start() {
     drawExceedance();
   });
   $('#hazard-form').addEventListener('submit', hazard);
+  $('#serviceability-form').addEventListener('submit', serviceability);
+  $('#sweep-form').addEventListener('submit', sweep);
   $('#fragility-form').addEventListener('submit', fragility);
   $('#sensitivity-form').addEventListener('submit', sensitivity);
   loadEverything();

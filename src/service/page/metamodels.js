@@ -1,6 +1,7 @@
 // Calibration (presets, the form, the advanced box) and the stored metamodels (diagnostics,
 // validations and their scatter, delete).
 import { configureAnalyses } from './analyses.js';
+import { configureSweep } from './design.js';
 import * as Charts from './charts.js';
 import { format } from './charts.js';
 import { $, $$, ApiProblem, api, apiSpec, checkSchema, clearErrors, numberField, session, showProblem } from './client.js';
@@ -95,6 +96,7 @@ async function choose(id) {
   $$('[data-current-metamodel]').forEach((node) => { node.textContent = `${id.slice(0, 8)} (${study.body.preset}, ${study.body.floors} floors)`; });
   showDiagnostics();
   configureAnalyses();
+  configureSweep();
   $('#validation-result').hidden = true;
   const validations = (await loadOperations()).filter((op) => op.kind === 'validation' && op.state === 'succeeded' && op.metamodel_id === id);
   if (validations.length) showValidation(validations[0].result);

@@ -47,11 +47,12 @@ impl Asset {
 const SCRIPT: &str = "text/javascript; charset=utf-8";
 
 /// The page's modules, each after the modules it imports, and its style sheet.
-const SOURCES: [(&str, &str, &str); 7] = [
+const SOURCES: [(&str, &str, &str); 8] = [
     ("charts.js", include_str!("../page/charts.js"), SCRIPT),
     ("client.js", include_str!("../page/client.js"), SCRIPT),
     ("operations.js", include_str!("../page/operations.js"), SCRIPT),
     ("analyses.js", include_str!("../page/analyses.js"), SCRIPT),
+    ("design.js", include_str!("../page/design.js"), SCRIPT),
     ("metamodels.js", include_str!("../page/metamodels.js"), SCRIPT),
     ("app.js", include_str!("../page/app.js"), SCRIPT),
     ("style.css", include_str!("../page/style.css"), "text/css; charset=utf-8"),
