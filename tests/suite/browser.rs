@@ -494,7 +494,8 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     let typed = r#"[{"name": "roof rms", "response": "acceleration", "statistic": "rms", "return_period_years": 1, "limit_milli_g": 5, "floors": [38, 40]}]"#;
     set_value(&browser, "#serviceability-criteria", &typed.replace("[38, 40]", "[0, 40]")).await;
     click(&browser, "#serviceability-form button[type=submit]").await;
-    let refused = "document.querySelector('#serviceability-criteria-error').textContent.includes('criteria[0].floors')";
+    // After the two built-ins checked by default, the typed criterion is the third.
+    let refused = "document.querySelector('#serviceability-criteria-error').textContent.includes('criteria[2].floors')";
     wait_until(&browser, refused, long).await;
     set_value(&browser, "#serviceability-criteria", typed).await;
     click(&browser, "#serviceability-form button[type=submit]").await;
@@ -510,6 +511,8 @@ async fn an_engineer_calibrates_and_explores_in_the_browser() {
     assert!(rms_row.contains("roof rms") && rms_row.contains("0.04903"), "5 milli-g in m/s²: {rms_row}");
     let profiles = "return document.querySelectorAll('#serviceability-chart polyline[data-series]').length;";
     assert_eq!(browser.execute(profiles, vec![]).await.unwrap(), json!(4));
+    browser.execute("document.querySelector('#serviceability-table').scrollIntoView();", vec![]).await.unwrap();
+    browser.screenshot().await.map(|png| std::fs::write(artefact("page-serviceability.png"), png).unwrap()).unwrap();
     // The sweep of a damper group's coefficient: one point per value.
     set_value(&browser, "#sweep-samples", "200").await;
     set_value(&browser, "#sweep-values", "0, 50000, 100000").await;
