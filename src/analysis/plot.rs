@@ -62,6 +62,29 @@ fn draw_curves(
 
 type Area<'a> = DrawingArea<SVGBackend<'a>, plotters::coord::Shift>;
 
+type FloorChart<'a, 'b> = ChartContext<
+    'a,
+    SVGBackend<'b>,
+    Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::types::RangedCoordf64>,
+>;
+
+/// Values (x, from 0 where `range` starts below) against the floors up to `top` (y), the mesh drawn.
+fn floor_chart<'a, 'b>(
+    root: &'a Area<'b>,
+    range: std::ops::Range<f64>,
+    top: f64,
+    x_label: &str,
+) -> Option<FloorChart<'a, 'b>> {
+    let mut chart = ChartBuilder::on(root)
+        .margin(12)
+        .x_label_area_size(40)
+        .y_label_area_size(48)
+        .build_cartesian_2d(range.start.max(0.0)..range.end, 0.0..top + 1.0)
+        .ok()?;
+    let _ = chart.configure_mesh().x_desc(x_label).y_desc("floor").draw();
+    Some(chart)
+}
+
 /// A serviceability check's profiles against their limits: at every judged floor, the T-year level
 /// over its limit (the utilisation) with its band, one colour per criterion, and the limit at 1.
 pub fn serviceability_svg(check: &Serviceability) -> String {
@@ -86,16 +109,10 @@ pub fn serviceability_svg(check: &Serviceability) -> String {
     let top = check.criteria.iter().flat_map(|c| c.profile.floors.iter().copied()).max().unwrap_or(1) as f64;
     render((640, 640), |root| {
         let all = drawn.iter().flat_map(|d| d.2.iter().chain(&d.3).chain(&d.4).flatten().copied());
-        let range = axis_range(all.chain([0.0, 1.0]), 0.04);
-        let Ok(mut chart) = ChartBuilder::on(root)
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(48)
-            .build_cartesian_2d(range.start.max(0.0)..range.end, 0.0..top + 1.0)
+        let Some(mut chart) = floor_chart(root, axis_range(all.chain([0.0, 1.0]), 0.04), top, "T-year level / limit")
         else {
             return;
         };
-        let _ = chart.configure_mesh().x_desc("T-year level / limit").y_desc("floor").draw();
         let _ = chart.draw_series(LineSeries::new([(1.0, 0.0), (1.0, top + 1.0)], BLACK.stroke_width(1)));
         for (i, (name, floors, values, lower, upper)) in drawn.iter().enumerate() {
             let colour = COLOURS[i % COLOURS.len()];
@@ -163,15 +180,9 @@ pub fn profile_svg(profile: &PeakProfile, x_label: &str) -> String {
     render((560, 640), |root| {
         let range = axis_range(profile.lower.iter().chain(&profile.upper).chain(&profile.means).copied(), 0.04);
         let top = profile.floors.iter().copied().max().unwrap_or(1) as f64;
-        let Ok(mut chart) = ChartBuilder::on(root)
-            .margin(12)
-            .x_label_area_size(40)
-            .y_label_area_size(48)
-            .build_cartesian_2d(range.start.max(0.0)..range.end, 0.0..top + 1.0)
-        else {
+        let Some(mut chart) = floor_chart(root, range, top, x_label) else {
             return;
         };
-        let _ = chart.configure_mesh().x_desc(x_label).y_desc("floor").draw();
         let at = |values: &[f64]| -> Vec<(f64, f64)> {
             values.iter().zip(&profile.floors).map(|(x, floor)| (*x, *floor as f64)).collect()
         };

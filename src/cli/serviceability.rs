@@ -5,7 +5,7 @@ use super::args::{AnalysisArgs, answer, climate_arg, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    CriterionChoice, Serviceability, ServiceabilityOptions, metamodel_serviceability, serviceability_svg,
+    BUILT_IN, CriterionChoice, Serviceability, ServiceabilityOptions, metamodel_serviceability, serviceability_svg,
 };
 use crate::error::{Error, Result};
 use clap::Args;
@@ -20,7 +20,8 @@ pub struct ServiceabilityArgs {
     /// metamodel's wind_speed.
     #[arg(long)]
     pub climate: Option<String>,
-    /// Built-in criteria, comma separated: nbcc-residential, nbcc-office, drift-h400.
+    /// Built-in criteria, comma separated: nbcc-residential, nbcc-office, drift-h400 (all three
+    /// when neither this nor --criteria-file is given).
     #[arg(long, value_delimiter = ',')]
     pub criteria: Vec<String>,
     /// A JSON array of criteria: built-in names or objects {"name", "response", "statistic",
@@ -39,7 +40,11 @@ pub struct ServiceabilityArgs {
 pub fn serviceability(args: &ServiceabilityArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.model)?;
-    let mut choices: Vec<CriterionChoice> = args.criteria.iter().cloned().map(CriterionChoice::BuiltIn).collect();
+    let named: Vec<String> = match (&args.criteria[..], &args.criteria_file) {
+        ([], None) => BUILT_IN.iter().map(|name| name.to_string()).collect(),
+        (names, _) => names.to_vec(),
+    };
+    let mut choices: Vec<CriterionChoice> = named.into_iter().map(CriterionChoice::BuiltIn).collect();
     if let Some(path) = &args.criteria_file {
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::invalid("criteria_file", format!("cannot read {}: {e}", path.display())))?;

@@ -171,3 +171,64 @@ async fn the_design_routes_answer_the_librarys_numbers() {
     }
     app.stop().await;
 }
+
+/// The commands as a user runs them: built-ins by name and a criteria file, every format, and bad
+/// input refused with exit code 2 naming the field.
+#[test]
+fn the_design_commands_answer_and_refuse_by_name() {
+    let run = |args: &[&str]| std::process::Command::new(env!("CARGO_BIN_EXE_windmeta")).args(args).output().unwrap();
+    let dir = std::env::temp_dir().join(format!("windmeta-design-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let model = dir.join("model.json");
+    std::fs::write(&model, serde_json::to_string(&fixture::metamodel().0).unwrap()).unwrap();
+    let model = model.to_str().unwrap();
+    let criteria = dir.join("criteria.json");
+    let typed = r#"["nbcc-residential", {"name": "rms", "response": "acceleration", "statistic": "rms",
+                    "return_period_years": 1, "limit": 0.05, "floors": [39, 40]}]"#;
+    std::fs::write(&criteria, typed).unwrap();
+    let criteria = criteria.to_str().unwrap();
+    let out = run(&["serviceability", "--model", model, "--criteria-file", criteria, "--samples", "120", "--json"]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let answer: Value = serde_json::from_slice(&out.stdout).unwrap();
+    let names: Vec<&str> = answer["criteria"].as_array().unwrap().iter().map(|c| c["name"].as_str().unwrap()).collect();
+    assert_eq!(names, ["nbcc-residential", "rms"]);
+    assert_eq!(answer["criteria"][1]["profile"]["floors"], json!([39, 40]));
+    for (file, check) in
+        [("check.csv", "criterion,response,statistic"), ("check.svg", "<svg"), ("check.json", "\"verdict\"")]
+    {
+        let path = dir.join(file);
+        let args = ["serviceability", "--model", model, "--criteria", "drift-h400", "--samples", "120", "--out"];
+        let out = run(&[&args[..], &[path.to_str().unwrap()]].concat());
+        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(std::fs::read_to_string(&path).unwrap().contains(check), "{file}");
+    }
+    let sweep_csv = dir.join("sweep.csv");
+    let sweep = ["sweep", "--model", model, "--input", "damper_c1", "--values", "0,50000", "--samples", "120"];
+    let out = run(&[&sweep[..], &["--out", sweep_csv.to_str().unwrap()]].concat());
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read_to_string(&sweep_csv).unwrap().lines().count(), 3, "a header and a row per value");
+    let bad_file = dir.join("bad.json");
+    std::fs::write(
+        &bad_file,
+        r#"[{"name": "c", "response": "drift", "return_period_years": 10, "limit": 0.01, "floors": [0, 1]}]"#,
+    )
+    .unwrap();
+    for (args, expected) in [
+        (vec!["serviceability", "--model", model, "--criteria", "comfy"], "criteria"),
+        (vec!["serviceability", "--model", model, "--criteria-file", bad_file.to_str().unwrap()], "criteria[0].floors"),
+        (vec!["serviceability", "--model", model, "--criteria-file", "missing.json"], "criteria_file"),
+        (vec!["serviceability", "--model", model, "--criteria", "nbcc-office", "--climate", "{}"], "climate"),
+        (vec!["sweep", "--model", model, "--input", "wind_speed", "--values", "30"], "input"),
+        (vec!["sweep", "--model", model, "--input", "damper_c1", "--values", "-1"], "values"),
+        (
+            vec!["sweep", "--model", model, "--input", "damper_c1", "--values", "1", "--return-period", "0.5"],
+            "return_period",
+        ),
+    ] {
+        let out = run(&args);
+        let stderr = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {stderr}");
+        assert!(stderr.contains(expected) && !stderr.contains("panicked"), "{args:?}: {stderr}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
