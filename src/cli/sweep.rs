@@ -76,10 +76,11 @@ fn table(sweep: &Sweep, label: &str, seconds: f64) -> String {
         sweep.strata
     );
     out += &format!("{:>14}  {:>10}  {:>10}  {:>10}\n", sweep.input, "level", "lower", "upper");
+    let value = |x: f64| if x != 0.0 && !(1e-3..1e6).contains(&x.abs()) { format!("{x:.4e}") } else { x.to_string() };
     for p in &sweep.results {
         out += &format!(
             "{:>14}  {:>10}  {:>10}  {:>10}\n",
-            p.input_value,
+            value(p.input_value),
             number(p.level),
             number(p.lower),
             number(p.upper)
