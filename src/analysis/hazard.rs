@@ -35,7 +35,7 @@ pub const MAX_RETURN_PERIOD: f64 = 1e6;
 
 /// One in this many of a certified analysis's reference storms go to their pilot: more than the
 /// metamodel's, for the pilot also measures how far the two models disagree.
-const REFERENCE_PILOT_SHARE: usize = 2;
+pub(super) const REFERENCE_PILOT_SHARE: usize = 2;
 
 /// The largest station speed the wind model admits (m/s).
 pub(super) const MAX_SPEED: f64 = 150.0;

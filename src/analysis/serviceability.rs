@@ -12,14 +12,17 @@ pub use criteria::{
 };
 
 use super::annual_sample::{Aim, AnnualDesign, AnnualSample, PILOT_SHARE};
+use super::certified_hazard::PairedStrata;
+use super::certify::{CertifyOptions, check_reference_storms};
 use super::exceedance::check_confidence;
-use super::hazard::{MAX_SPEED, WIND_SPEED, return_level};
+use super::hazard::{MAX_SPEED, REFERENCE_PILOT_SHARE, WIND_SPEED, return_level};
+use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
 use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, peak_sets_at};
 use super::strata::{Estimate, StormRows, StratifiedPeaks, WindStrata, pilot};
 use super::{Response, ResponseKind};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
-use crate::study::Study;
+use crate::study::{Order, Study};
 use crate::surrogate::Metamodel;
 use crate::uncertainty::{InputModel, Marginal, rng_from_seed};
 use serde::{Deserialize, Serialize};
@@ -34,6 +37,9 @@ pub struct ServiceabilityOptions {
     pub samples: usize,
     pub seed: u64,
     pub confidence: f64,
+    /// Certify each criterion's governing floor with this many storms through both the reference
+    /// model and the metamodel, shared out over the wind strata ([`super::certified_hazard`]).
+    pub certify: Option<CertifyOptions>,
 }
 
 /// How a criterion came out.
@@ -111,6 +117,23 @@ pub struct CriterionCheck {
     pub verdict: Verdict,
     pub profile: LevelProfile,
     pub strength: Option<StrengthCheck>,
+    /// What the reference storms did, when the check was certified: then the governing floor's
+    /// level, band and utilisation (and its entry in `profile`) are the certified ones, and the
+    /// verdict is judged with them.
+    pub certification: Option<CriterionCertification>,
+}
+
+/// A criterion's governing floor certified by storms through both models.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+pub struct CriterionCertification {
+    pub floor: usize,
+    pub reference_storms: usize,
+    pub order: Order,
+    /// The metamodel's own level and band at that floor.
+    pub metamodel_value: Option<f64>,
+    pub metamodel_lower: Option<f64>,
+    pub metamodel_upper: Option<f64>,
 }
 
 /// A serviceability check's answer.
@@ -151,6 +174,10 @@ impl ServiceabilityOptions {
             .map(|(i, c)| c.resolve(&study.structure, &format!("criteria[{i}]")))
             .collect::<Result<Vec<_>>>()?;
         pilot(&self.strata(), self.samples, PILOT_SHARE, "samples")?;
+        if let Some(certify) = &self.certify {
+            check_reference_storms(certify.reference_storms, self.samples, "certify.reference_storms")?;
+            pilot(&self.strata(), certify.reference_storms, REFERENCE_PILOT_SHARE, "certify.reference_storms")?;
+        }
         Ok(resolved)
     }
 
@@ -168,6 +195,7 @@ pub fn metamodel_serviceability(
     metamodel: &Metamodel,
     study: &Study,
     options: &ServiceabilityOptions,
+    runner: &dyn ReferenceRunner,
     observer: &dyn Observer,
 ) -> Result<Serviceability> {
     let resolved = options.resolve(study)?;
@@ -177,18 +205,26 @@ pub fn metamodel_serviceability(
         let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
         peak_sets_at(metamodel, &draws, responses, observer)
     };
-    serviceability_check(&study.inputs, &resolved, options, calibrated, peaks_of)
+    let order = options.certify.map_or(Order::Reduced, |c| c.order);
+    let pairs_of = |response: Response, rows: &[Vec<f64>], first: usize| {
+        let runs = PairedRuns { metamodel, study, seed: reference_storm_seed(options.seed), response, order };
+        let storms: Vec<usize> = (first..first + rows.len()).collect();
+        runner.pairs(&runs, rows, &storms, observer)
+    };
+    serviceability_check(&study.inputs, &resolved, options, calibrated, peaks_of, pairs_of)
 }
 
 /// The check of the `resolved` criteria on storms drawn from `inputs` with the wind speed the
 /// climate's: `peaks_of(responses, rows, first)` answers `[row][response]` (`first`: the rows run
-/// before, so that every row gets its own storm).
+/// before, so that every row gets its own storm). Certified, `pairs_of(response, rows, first)`
+/// runs rows drawn from the reference storms' seed through both models.
 pub fn serviceability_check(
     inputs: &InputModel,
     resolved: &[ResolvedCriterion],
     options: &ServiceabilityOptions,
     calibrated: [f64; 2],
     mut peaks_of: impl FnMut(&[Response], &[Vec<f64>], usize) -> Result<Vec<Vec<f64>>>,
+    mut pairs_of: impl FnMut(Response, &[Vec<f64>], usize) -> Result<Vec<PairedPeak>>,
 ) -> Result<Serviceability> {
     let (responses, columns) = columns_of(resolved);
     let strata = options.strata();
@@ -197,7 +233,53 @@ pub fn serviceability_check(
     let aims = |pilot: &[StratifiedPeaks]| criteria_aims(resolved, &columns, pilot, options.confidence);
     let sample =
         design.draw(&mut rng_from_seed(options.seed), |rows, first| peaks_of(&responses, rows, first), aims)?;
-    Ok(judge(resolved, &columns, &sample, options, &strata, calibrated))
+    let mut check = judge(resolved, &columns, &sample, options, &strata, calibrated);
+    if let Some(certify) = &options.certify {
+        for ((judged, criterion), columns) in check.criteria.iter_mut().zip(resolved).zip(&columns) {
+            let at = judged.profile.floors.iter().position(|&f| f == judged.governing_floor).expect("a judged floor");
+            let column = &sample.columns[columns[at]];
+            let response = criterion.responses[at];
+            let seed = reference_storm_seed(options.seed);
+            let pairs = |rows: &[Vec<f64>], first: usize| pairs_of(response, rows, first);
+            let targets: Vec<f64> = judged.value.into_iter().collect();
+            let paired =
+                PairedStrata::draw(&design.rows, column, &targets, certify, REFERENCE_PILOT_SHARE, seed, pairs)?;
+            certify_governing(judged, at, column, &paired, certify, options.confidence);
+        }
+    }
+    Ok(check)
+}
+
+/// Replaces the governing floor's level and band by the certified ones and judges again.
+fn certify_governing(
+    judged: &mut CriterionCheck,
+    at: usize,
+    column: &StratifiedPeaks,
+    paired: &PairedStrata,
+    certify: &CertifyOptions,
+    confidence: f64,
+) {
+    // The certified level may lie beyond the metamodel's peaks, among the reference's.
+    let mut levels = column.finite_peaks();
+    levels.extend(paired.finite_peaks());
+    levels.sort_by(f64::total_cmp);
+    let level =
+        return_level(&levels, judged.return_period_years, |x| paired.exceedance(column, x, confidence).estimate);
+    judged.certification = Some(CriterionCertification {
+        floor: judged.governing_floor,
+        reference_storms: certify.reference_storms,
+        order: certify.order,
+        metamodel_value: judged.value,
+        metamodel_lower: judged.lower,
+        metamodel_upper: judged.upper,
+    });
+    let profile = &mut judged.profile;
+    (profile.values[at], profile.lower[at], profile.upper[at]) = (level.value, level.lower, level.upper);
+    (judged.value, judged.lower, judged.upper) = (level.value, level.lower, level.upper);
+    judged.utilisation = level.value.map(|v| v / judged.limit);
+    if judged.strength.is_none() {
+        judged.verdict = level_verdict(&judged.profile);
+    }
 }
 
 /// Every response the criteria judge, once each, and each criterion's columns among them.
@@ -292,6 +374,15 @@ fn limit_exceedances(
     columns.iter().zip(&criterion.limits).map(|(&c, &limit)| sample[c].exceedance(limit, confidence)).collect()
 }
 
+/// A level criterion's verdict over its profile.
+fn level_verdict(profile: &LevelProfile) -> Verdict {
+    let floors = 0..profile.floors.len();
+    verdict(
+        floors.clone().any(|i| profile.lower[i].is_some_and(|x| x > profile.limits[i])),
+        floors.clone().all(|i| profile.upper[i].is_some_and(|x| x <= profile.limits[i])),
+    )
+}
+
 /// `pass` where every end that matters is within, `fail` where some is beyond.
 fn verdict(beyond_for_sure: bool, within_for_sure: bool) -> Verdict {
     match (beyond_for_sure, within_for_sure) {
@@ -317,11 +408,7 @@ fn judge(
             let profile = profile(criterion, columns, &sample.columns, confidence);
             let at = governing(&profile);
             let limit = profile.limits[at];
-            let floors = 0..profile.floors.len();
-            let level_verdict = verdict(
-                floors.clone().any(|i| profile.lower[i].is_some_and(|x| x > profile.limits[i])),
-                floors.clone().all(|i| profile.upper[i].is_some_and(|x| x <= profile.limits[i])),
-            );
+            let level_verdict = level_verdict(&profile);
             let (strength, verdict) = match criterion.criterion.strength {
                 Some(target) => {
                     let exceedances = limit_exceedances(criterion, columns, &sample.columns, confidence);
@@ -349,6 +436,7 @@ fn judge(
                 verdict,
                 profile,
                 strength,
+                certification: None,
             }
         })
         .collect();
@@ -468,12 +556,16 @@ mod tests {
             samples: 20_000,
             seed: 7,
             confidence: 0.95,
+            certify: None,
         };
         let structure = crate::study::Study::preset("frame40-kn").unwrap().structure;
         let resolved: Vec<ResolvedCriterion> =
             options.criteria.iter().map(|c| c.resolve(&structure, "criteria[0]").unwrap()).collect();
         let peaks_of = |responses: &[Response], rows: &[Vec<f64>], _| Ok(toy_peaks(responses, rows));
-        let check = serviceability_check(&toy_inputs(), &resolved, &options, [15.0, 45.0], peaks_of).unwrap();
+        let not_paired =
+            |_: Response, _: &[Vec<f64>], _: usize| -> Result<Vec<PairedPeak>> { unreachable!("not certified") };
+        let check =
+            serviceability_check(&toy_inputs(), &resolved, &options, [15.0, 45.0], peaks_of, not_paired).unwrap();
         let [within, beyond, at, strength] = &check.criteria[..] else { panic!("four criteria") };
         for (i, floor) in [1, 2, 3].into_iter().enumerate() {
             let exact = floor as f64 * 1e-3 * x10;

@@ -1,11 +1,12 @@
 //! `windmeta serviceability`: criteria of comfort, drift and strength judged together under a
 //! site's climate, each with its governing floor, band and verdict.
 
-use super::args::{AnalysisArgs, answer, climate_arg, out_format};
+use super::args::{AnalysisArgs, CertifyArgs, answer, climate_arg, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    BUILT_IN, CriterionChoice, Serviceability, ServiceabilityOptions, metamodel_serviceability, serviceability_svg,
+    BUILT_IN, CriterionChoice, OnThisMachine, Serviceability, ServiceabilityOptions, metamodel_serviceability,
+    serviceability_svg,
 };
 use crate::error::{Error, Result};
 use clap::Args;
@@ -30,6 +31,9 @@ pub struct ServiceabilityArgs {
     pub criteria_file: Option<PathBuf>,
     #[arg(long, default_value_t = 20_000)]
     pub samples: usize,
+    /// With --certify N: each criterion's governing floor certified by N storms through both models.
+    #[command(flatten)]
+    pub certify: CertifyArgs,
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the answer: .csv, .json or .svg by extension.
@@ -59,9 +63,10 @@ pub fn serviceability(args: &ServiceabilityArgs) -> Result<String> {
         samples: args.samples,
         seed: args.analysis.seed,
         confidence: args.analysis.confidence,
+        certify: args.certify.options(),
     };
     let started = Instant::now();
-    let check = metamodel_serviceability(&metamodel, &study, &options, &Counter(started))?;
+    let check = metamodel_serviceability(&metamodel, &study, &options, &OnThisMachine, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let out = args.out.as_deref().zip(format);
     let render = |format: &str| if format == "csv" { check.csv() } else { serviceability_svg(&check) };
@@ -95,6 +100,18 @@ fn table(check: &Serviceability, seconds: f64) -> String {
             c.utilisation.map_or("-".into(), |u| format!("{u:.2}")),
             c.verdict
         );
+        if let Some(certified) = &c.certification {
+            out += &format!(
+                "{:<18} certified at floor {} with {} reference storms ({:?} order); the metamodel alone: {} [{}, {}]\n",
+                "",
+                certified.floor,
+                certified.reference_storms,
+                certified.order,
+                number(certified.metamodel_value),
+                number(certified.metamodel_lower),
+                number(certified.metamodel_upper),
+            );
+        }
         if let Some(s) = &c.strength {
             out += &format!(
                 "{:<18} floor {}: P = {:.2e} per year [{:.2e}, {:.2e}], beta {} against the target {:.2e} (beta {:.2}) of risk category {:?}\n",

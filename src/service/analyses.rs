@@ -286,7 +286,10 @@ impl AnalysisRequest {
                 r.certify.map_or(0, |c| c.reference_storms.saturating_mul(r.wind_speeds.len()))
             }
             AnalysisRequest::Hazard(r) => r.certify.map_or(0, |c| c.reference_storms),
-            AnalysisRequest::Sensitivity(_) | AnalysisRequest::Serviceability(_) | AnalysisRequest::Sweep(_) => 0,
+            AnalysisRequest::Serviceability(r) => {
+                r.certify.map_or(0, |c| c.reference_storms.saturating_mul(r.criteria.len()))
+            }
+            AnalysisRequest::Sensitivity(_) | AnalysisRequest::Sweep(_) => 0,
         }
     }
 
@@ -357,7 +360,7 @@ impl AnalysisRequest {
                 }))
             }
             AnalysisRequest::Serviceability(r) => {
-                let check = metamodel_serviceability(metamodel, study, &r.options(study)?, observer)?;
+                let check = metamodel_serviceability(metamodel, study, &r.options(study)?, reference, observer)?;
                 AnalysisAnswer::Serviceability(Box::new(ServiceabilityAnswer { check, metamodel_id }))
             }
             AnalysisRequest::Sweep(r) => {

@@ -2,8 +2,8 @@
 //! design and to size its dampers, checked here and answered by the library.
 
 use crate::analysis::{
-    ClimateSpec, CriterionChoice, Response, ResponseKind, Serviceability, ServiceabilityOptions, Sweep, SweepOptions,
-    climate_or_own,
+    CertifyOptions, ClimateSpec, CriterionChoice, Response, ResponseKind, Serviceability, ServiceabilityOptions, Sweep,
+    SweepOptions, climate_or_own,
 };
 use crate::error::Result;
 use crate::study::Study;
@@ -30,6 +30,11 @@ pub struct ServiceabilityRequest {
     pub seed: u64,
     #[schema(exclusive_minimum = 0, exclusive_maximum = 1, default = 0.95)]
     pub confidence: f64,
+    /// Certify each criterion's governing floor with this many storms run through both the
+    /// reference model and the metamodel, shared out over the wind strata (at most the request's
+    /// storms; all criteria's together within the server's bound). A certified check always runs
+    /// as an operation.
+    pub certify: Option<CertifyOptions>,
 }
 
 impl Default for ServiceabilityRequest {
@@ -40,6 +45,7 @@ impl Default for ServiceabilityRequest {
             samples: 20_000,
             seed: 1,
             confidence: 0.95,
+            certify: None,
         }
     }
 }
@@ -54,6 +60,7 @@ impl ServiceabilityRequest {
             samples: self.samples,
             seed: self.seed,
             confidence: self.confidence,
+            certify: self.certify,
         };
         options.resolve(study)?;
         Ok(options)

@@ -7,11 +7,12 @@ use crate::harness::app::{assert_problem, database, problem_details, spawn_app};
 use crate::harness::fixture;
 use serde_json::{Value, json};
 use windmeta::analysis::{
-    Criterion, DEFAULT_RETURN_PERIODS, HazardOptions, OnThisMachine, Response, ResponseKind, Sampling,
+    CertifyOptions, Criterion, DEFAULT_RETURN_PERIODS, HazardOptions, OnThisMachine, Response, ResponseKind, Sampling,
     ServiceabilityOptions, Statistic, SweepOptions, Verdict, metamodel_hazard, metamodel_serviceability,
     metamodel_sweep,
 };
 use windmeta::progress::Silent;
+use windmeta::study::Order;
 use windmeta::uncertainty::Marginal;
 
 const CLIMATE: Marginal = Marginal::Gumbel { location: 25.0, scale: 2.5 };
@@ -59,8 +60,9 @@ fn a_criterion_finds_the_annual_curves_level() {
             samples,
             seed,
             confidence: 0.95,
+            certify: None,
         };
-        metamodel_serviceability(metamodel, study, &options, &Silent).unwrap().criteria.remove(0)
+        metamodel_serviceability(metamodel, study, &options, &OnThisMachine, &Silent).unwrap().criteria.remove(0)
     };
     let judged = check(2.0 * upper);
     for (got, want) in [(judged.value, value), (judged.lower, lower), (judged.upper, upper)] {
@@ -70,6 +72,46 @@ fn a_criterion_finds_the_annual_curves_level() {
     assert_eq!(check(0.5 * lower).verdict, Verdict::Fail);
     assert_eq!(check(value).verdict, Verdict::Inconclusive);
     assert!(DEFAULT_RETURN_PERIODS.contains(&10.0));
+}
+
+/// Certified, the criterion's governing floor is the certified annual curve's: the same reference
+/// storms (one seed, the allocation aimed at the same level) correct the same metamodel sample, so
+/// the certified level and band are the curve's to rounding, and the metamodel's own are kept.
+#[test]
+fn a_certified_criterion_finds_the_certified_curves_level() {
+    let (metamodel, study) = fixture::metamodel();
+    let (samples, seed) = (400, 5);
+    let certify = Some(CertifyOptions { reference_storms: 40, order: Order::Reduced });
+    let hazard = HazardOptions {
+        climate: CLIMATE,
+        samples,
+        seed,
+        thresholds: None,
+        return_periods: vec![10.0],
+        limit: None,
+        confidence: 0.95,
+        sampling: Sampling::Stratified,
+        certify,
+    };
+    let roof = Response::Acceleration { floor: 40 };
+    let curve = metamodel_hazard(metamodel, study, roof, &hazard, &OnThisMachine, &Silent).unwrap();
+    let level = &curve.return_levels[0];
+    let options = ServiceabilityOptions {
+        climate: CLIMATE,
+        criteria: vec![roof_acceleration(1.0)],
+        samples,
+        seed,
+        confidence: 0.95,
+        certify,
+    };
+    let judged =
+        metamodel_serviceability(metamodel, study, &options, &OnThisMachine, &Silent).unwrap().criteria.remove(0);
+    for (got, want) in [(judged.value, level.value), (judged.lower, level.lower), (judged.upper, level.upper)] {
+        assert!((got.unwrap() / want.unwrap() - 1.0).abs() < 1e-12, "{got:?} vs {want:?}");
+    }
+    let c = judged.certification.unwrap();
+    assert_eq!((c.floor, c.reference_storms), (40, 40));
+    assert!(c.metamodel_value.is_some() && judged.profile.values[0] == judged.value);
 }
 
 /// Over HTTP the check and the sweep are the library's; CSV and SVG by `Accept`; more damping in
@@ -94,8 +136,11 @@ async fn the_design_routes_answer_the_librarys_numbers() {
         samples: 300,
         seed: 2,
         confidence: 0.95,
+        certify: None,
     };
-    let here = tokio::task::block_in_place(|| metamodel_serviceability(metamodel, study, &options, &Silent).unwrap());
+    let here = tokio::task::block_in_place(|| {
+        metamodel_serviceability(metamodel, study, &options, &OnThisMachine, &Silent).unwrap()
+    });
     assert_eq!(served["criteria"], serde_json::to_value(&here.criteria).unwrap());
     assert_eq!(served["metamodel_id"], id.as_str());
     assert_eq!(served["criteria"][0]["profile"]["floors"].as_array().unwrap().len(), 10);
@@ -129,6 +174,25 @@ async fn the_design_routes_answer_the_librarys_numbers() {
     }
     let (status, _, _) = problem_details(app.post(&path, criterion(json!({"response": "sway"}))).await).await;
     assert_eq!(status, 422, "an unknown response is refused");
+    // Certified, the check is an operation whose result is the library's certified check.
+    let certify = json!({"reference_storms": 40});
+    let certified =
+        json!({"climate": climate, "criteria": ["nbcc-office"], "samples": 300, "seed": 2, "certify": certify});
+    let (status, queued) = app.post_json(&path, certified).await;
+    assert_eq!(status, 202, "{queued}");
+    let limit = std::time::Duration::from_secs(120);
+    let done = app.wait_for(queued["id"].as_str().unwrap(), &["succeeded", "failed"], limit).await;
+    assert_eq!(done["state"], "succeeded", "{done}");
+    let options = ServiceabilityOptions {
+        criteria: criteria[..1].to_vec(),
+        certify: Some(CertifyOptions { reference_storms: 40, order: Order::Reduced }),
+        ..options.clone()
+    };
+    let here = tokio::task::block_in_place(|| {
+        metamodel_serviceability(metamodel, study, &options, &OnThisMachine, &Silent).unwrap()
+    });
+    assert_eq!(done["result"]["criteria"], serde_json::to_value(&here.criteria).unwrap());
+    assert_eq!(done["result"]["criteria"][0]["certification"]["reference_storms"], 40);
 
     let path = format!("/v1/metamodels/{id}/sweep");
     let values = [0.0, 50_000.0, 100_000.0];
