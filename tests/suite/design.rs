@@ -7,9 +7,9 @@ use crate::harness::app::{assert_problem, database, problem_details, spawn_app};
 use crate::harness::fixture;
 use serde_json::{Value, json};
 use windmeta::analysis::{
-    CertifyOptions, Criterion, DEFAULT_RETURN_PERIODS, HazardOptions, OnThisMachine, Response, ResponseKind, Sampling,
-    ServiceabilityOptions, Statistic, SweepOptions, Verdict, metamodel_hazard, metamodel_serviceability,
-    metamodel_sweep,
+    CertifyOptions, Criterion, DEFAULT_RETURN_PERIODS, HazardOptions, OnThisMachine, Response, ResponseKind,
+    ReturnLevel, Sampling, ServiceabilityOptions, Statistic, SweepOptions, Verdict, metamodel_hazard,
+    metamodel_serviceability, metamodel_sweep,
 };
 use windmeta::progress::Silent;
 use windmeta::study::Order;
@@ -30,14 +30,9 @@ fn roof_acceleration(limit: f64) -> Criterion {
     }
 }
 
-/// One criterion at the roof's 10-year level aims the strata where an annual curve asking for the
-/// 10-year level aims them (Neyman's scores doubled are the same allocation), so it draws the same
-/// storms and must find the same level and band, to rounding; limits on either side of the band
-/// give `pass` and `fail`.
-#[test]
-fn a_criterion_finds_the_annual_curves_level() {
+/// The fixture's 10-year roof acceleration from its annual curve under [`CLIMATE`].
+fn roof_acceleration_level(samples: usize, seed: u64, certify: Option<CertifyOptions>) -> ReturnLevel {
     let (metamodel, study) = fixture::metamodel();
-    let (samples, seed) = (400, 5);
     let hazard = HazardOptions {
         climate: CLIMATE,
         samples,
@@ -47,11 +42,22 @@ fn a_criterion_finds_the_annual_curves_level() {
         limit: None,
         confidence: 0.95,
         sampling: Sampling::Stratified,
-        certify: None,
+        certify,
     };
     let roof = Response::Acceleration { floor: 40 };
     let curve = metamodel_hazard(metamodel, study, roof, &hazard, &OnThisMachine, &Silent).unwrap();
-    let level = &curve.return_levels[0];
+    curve.return_levels[0].clone()
+}
+
+/// One criterion at the roof's 10-year level aims the strata where an annual curve asking for the
+/// 10-year level aims them (Neyman's scores doubled are the same allocation), so it draws the same
+/// storms and must find the same level and band, to rounding; limits on either side of the band
+/// give `pass` and `fail`.
+#[test]
+fn a_criterion_finds_the_annual_curves_level() {
+    let (metamodel, study) = fixture::metamodel();
+    let (samples, seed) = (400, 5);
+    let level = roof_acceleration_level(samples, seed, None);
     let (value, lower, upper) = (level.value.unwrap(), level.lower.unwrap(), level.upper.unwrap());
     let check = |limit: f64| {
         let options = ServiceabilityOptions {
@@ -82,20 +88,7 @@ fn a_certified_criterion_finds_the_certified_curves_level() {
     let (metamodel, study) = fixture::metamodel();
     let (samples, seed) = (400, 5);
     let certify = Some(CertifyOptions { reference_storms: 40, order: Order::Reduced });
-    let hazard = HazardOptions {
-        climate: CLIMATE,
-        samples,
-        seed,
-        thresholds: None,
-        return_periods: vec![10.0],
-        limit: None,
-        confidence: 0.95,
-        sampling: Sampling::Stratified,
-        certify,
-    };
-    let roof = Response::Acceleration { floor: 40 };
-    let curve = metamodel_hazard(metamodel, study, roof, &hazard, &OnThisMachine, &Silent).unwrap();
-    let level = &curve.return_levels[0];
+    let level = roof_acceleration_level(samples, seed, certify);
     let options = ServiceabilityOptions {
         climate: CLIMATE,
         criteria: vec![roof_acceleration(1.0)],
