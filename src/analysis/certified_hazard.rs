@@ -120,6 +120,16 @@ impl PairedStrata {
         self.errors.sort_by(f64::total_cmp);
     }
 
+    /// The levels a certified curve's return levels are sought among: the metamodel's finite peaks
+    /// and the pairs' (a certified level may lie beyond the metamodel's peaks, among the
+    /// reference's), ascending.
+    pub fn levels_with(&self, metamodel: &StratifiedPeaks) -> Vec<f64> {
+        let mut levels = metamodel.finite_peaks();
+        levels.extend(self.finite_peaks());
+        levels.sort_by(f64::total_cmp);
+        levels
+    }
+
     /// Every finite peak of the pairs, the reference's and the metamodel's.
     pub fn finite_peaks(&self) -> impl Iterator<Item = f64> + '_ {
         self.strata.iter().flatten().flat_map(|p| [p.reference, p.metamodel]).filter(|p| p.is_finite())

@@ -246,8 +246,8 @@ pub fn hazard_curve(
         None => None,
     };
     let confidence = options.confidence;
-    let mut levels = sample.finite_peaks();
-    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&levels, 50));
+    let peaks = sample.finite_peaks();
+    let thresholds = options.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
     let certified = |x: f64| paired.as_ref().map(|paired| paired.exceedance(&sample, x, confidence));
     let estimate = |x: f64| certified(x).map_or_else(|| sample.exceedance(x, confidence), |point| point.estimate);
     let estimates: Vec<Estimate> = thresholds.iter().map(|&x| estimate(x)).collect();
@@ -255,11 +255,7 @@ pub fn hazard_curve(
         let points: Vec<CertifiedPoint> = thresholds.iter().filter_map(|&x| certified(x)).collect();
         paired.certification(&points)
     });
-    // A certified curve's levels may lie beyond the metamodel's peaks, among the reference's.
-    if let Some(paired) = &paired {
-        levels.extend(paired.finite_peaks());
-        levels.sort_by(f64::total_cmp);
-    }
+    let levels = paired.as_ref().map_or(peaks, |paired| paired.levels_with(&sample));
     let return_levels = options.return_periods.iter().map(|&t| return_level(&levels, t, estimate)).collect();
     let reliability = options.limit.map(|limit| reliability(limit, estimate(limit)));
     let climate = &options.climate;

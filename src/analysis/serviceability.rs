@@ -4,8 +4,10 @@
 //! its limit against ASCE 7's target. Every floor and criterion is read off the same storms
 //! ([`super::annual_sample`]), stratified over the climate as an annual curve is.
 
+mod certified;
 mod criteria;
 
+pub use certified::CriterionCertification;
 pub use criteria::{
     BUILT_IN, Criterion, CriterionChoice, FailureMode, MAX_CRITERIA, ResolvedCriterion, RiskCategory, Statistic,
     StrengthTarget, built_in,
@@ -123,19 +125,6 @@ pub struct CriterionCheck {
     pub certification: Option<CriterionCertification>,
 }
 
-/// A criterion's governing floor certified by storms through both models.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
-pub struct CriterionCertification {
-    pub floor: usize,
-    pub reference_storms: usize,
-    pub order: Order,
-    /// The metamodel's own level and band at that floor.
-    pub metamodel_value: Option<f64>,
-    pub metamodel_lower: Option<f64>,
-    pub metamodel_upper: Option<f64>,
-}
-
 /// A serviceability check's answer.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
@@ -244,42 +233,10 @@ pub fn serviceability_check(
             let targets: Vec<f64> = judged.value.into_iter().collect();
             let paired =
                 PairedStrata::draw(&design.rows, column, &targets, certify, REFERENCE_PILOT_SHARE, seed, pairs)?;
-            certify_governing(judged, at, column, &paired, certify, options.confidence);
+            certified::certify_governing(judged, at, column, &paired, certify, options.confidence);
         }
     }
     Ok(check)
-}
-
-/// Replaces the governing floor's level and band by the certified ones and judges again.
-fn certify_governing(
-    judged: &mut CriterionCheck,
-    at: usize,
-    column: &StratifiedPeaks,
-    paired: &PairedStrata,
-    certify: &CertifyOptions,
-    confidence: f64,
-) {
-    // The certified level may lie beyond the metamodel's peaks, among the reference's.
-    let mut levels = column.finite_peaks();
-    levels.extend(paired.finite_peaks());
-    levels.sort_by(f64::total_cmp);
-    let level =
-        return_level(&levels, judged.return_period_years, |x| paired.exceedance(column, x, confidence).estimate);
-    judged.certification = Some(CriterionCertification {
-        floor: judged.governing_floor,
-        reference_storms: certify.reference_storms,
-        order: certify.order,
-        metamodel_value: judged.value,
-        metamodel_lower: judged.lower,
-        metamodel_upper: judged.upper,
-    });
-    let profile = &mut judged.profile;
-    (profile.values[at], profile.lower[at], profile.upper[at]) = (level.value, level.lower, level.upper);
-    (judged.value, judged.lower, judged.upper) = (level.value, level.lower, level.upper);
-    judged.utilisation = level.value.map(|v| v / judged.limit);
-    if judged.strength.is_none() {
-        judged.verdict = level_verdict(&judged.profile);
-    }
 }
 
 /// Every response the criteria judge, once each, and each criterion's columns among them.
