@@ -1,4 +1,5 @@
-//! Annual (hazard), fragility and sensitivity requests: what a client asks, how it is checked, and
+//! Annual (hazard), fragility, sensitivity, serviceability and sweep requests as one
+//! [`AnalysisRequest`]: what a client asks, how it is checked, and
 //! the sampling that answers it, shared by the synchronous routes and the workers that run large
 //! requests as operations.
 

@@ -38,25 +38,29 @@ pub struct ServeArgs {
     /// The log's format (standard output; `RUST_LOG` filters it).
     #[arg(long, env = "WINDMETA_LOG_FORMAT", value_enum, default_value_t = LogFormat::Text)]
     pub log_format: LogFormat,
-    /// Calibration jobs run at once (each uses every core through rayon).
+    /// Jobs and tasks this replica runs at once (each uses every core through rayon).
     #[arg(long, env = "WINDMETA_WORKERS", default_value_t = 1)]
     pub workers: usize,
     /// Largest request body accepted (bytes).
     #[arg(long, env = "WINDMETA_MAX_BODY_BYTES", default_value_t = 4 * 1024 * 1024)]
     pub max_body_bytes: usize,
-    /// Most samples an exceedance request may ask for.
+    /// Most storms an exceedance request may sample (the other analyses are bounded by
+    /// `--max-analysis-storms`).
     #[arg(long, env = "WINDMETA_MAX_SAMPLES", default_value_t = 20_000)]
     pub max_samples: usize,
-    /// Most metamodel storms one hazard, fragility or sensitivity request may run (about 35 s of
-    /// two cores at full size for 100 000).
+    /// Most metamodel storms one hazard, fragility, sensitivity, serviceability or sweep request
+    /// may run, counted over all its wind speeds, swept values or Sobol blocks (about 35 s of two
+    /// cores at full size for 100 000).
     #[arg(long, env = "WINDMETA_MAX_ANALYSIS_STORMS", default_value_t = 100_000)]
     pub max_analysis_storms: usize,
     /// Most storms one certified request may run through the reference model (each about as
     /// costly as a few hundred metamodel storms); at most 5 000.
     #[arg(long, env = "WINDMETA_MAX_REFERENCE_STORMS", default_value_t = 1_000)]
     pub max_reference_storms: usize,
-    /// Exceedance requests up to this many samples are answered at once; larger ones (and any
-    /// with `Prefer: respond-async`) run as operations.
+    /// Sampling requests (exceedance, hazard, fragility, sensitivity, serviceability, sweep) of
+    /// up to this many metamodel storms are answered at once; larger ones, certified ones and any
+    /// with `Prefer: respond-async` run as operations. A demand sample, always answered at once,
+    /// may have at most this many storms.
     #[arg(long, env = "WINDMETA_MAX_SYNC_SAMPLES", default_value_t = 2_000)]
     pub max_sync_samples: usize,
     /// Jobs that may wait in the queue; beyond, new work is refused with 503 and `Retry-After`.
@@ -74,12 +78,13 @@ pub struct ServeArgs {
     /// Origins allowed by CORS, comma separated (none: no CORS headers).
     #[arg(long, env = "WINDMETA_CORS_ORIGINS", value_delimiter = ',')]
     pub cors_origins: Vec<String>,
-    /// Synchronous exceedance requests sampled at once (0: one per core); beyond, 503 with
-    /// `Retry-After`. Each uses every core, so more only queue inside the process.
+    /// Sampling requests answered at once at the same time, on every sampling route (0: one per
+    /// core); beyond, 503 with `Retry-After`. Each uses every core, so more only queue inside the
+    /// process.
     #[arg(long, env = "WINDMETA_MAX_SYNC_REQUESTS", default_value_t = 0)]
     pub max_sync_requests: usize,
-    /// A synchronous exceedance request that has not been answered after this many seconds is
-    /// cancelled and answered 503.
+    /// A sampling request answered at once that has not been answered after this many seconds is
+    /// cancelled and answered 503 (ask for fewer storms, or for an operation).
     #[arg(long, env = "WINDMETA_SYNC_TIMEOUT_S", default_value_t = 60)]
     pub sync_timeout_s: u64,
     /// Operation event streams (SSE) open at once on this replica; beyond, 503 with `Retry-After`.

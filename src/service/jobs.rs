@@ -9,14 +9,13 @@
 //! storms the same way ([`ReferenceTasks`]). Idle workers of any replica take tasks before new
 //! jobs. The rest of a job runs whole on the worker that claimed it.
 
-use super::analyses::AnalysisJob;
-use super::cache::stored_metamodel;
-use super::exceedance::{ExceedanceJob, held_inputs};
+use super::exceedance::held_inputs;
 use super::lease::LeaseKeeper;
 use super::store::Store;
 use super::supervision::{Supervision, blocking, through_faults};
 use super::tasks::{EXPERIMENTS_PER_TASK, Experiments, ReferenceTasks, TaskRequest, run_task, work_through_tasks};
-use super::{AppState, CalibrationRequest, ValidationJob};
+use super::work::Job;
+use super::{AppState, CalibrationRequest};
 use crate::analysis::validate;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, Silent};
@@ -86,30 +85,23 @@ enum JobOutput {
 
 type WorkFuture = Pin<Box<dyn Future<Output = Result<(JobOutput, String)>> + Send>>;
 
-fn parse<T: serde::de::DeserializeOwned>(request: &str) -> Result<T> {
-    serde_json::from_str(request).map_err(|e| Error::invalid("request", e.to_string()))
-}
-
 /// Reads a job's request into the work that answers it.
 async fn prepare(
     state: &AppState,
     id: &str,
     owner: &str,
-    kind: &str,
-    request: &str,
+    job: Job,
     supervision: Arc<Supervision>,
 ) -> Result<WorkFuture> {
-    match kind {
-        "calibration" => {
-            let request: CalibrationRequest = parse(request)?;
+    match job {
+        Job::Calibration(request) => {
             let (checked, config) = (request.clone(), state.config.clone());
             let (study, options) = blocking(move || checked.resolve(&config)).await?;
             let work =
-                coordinate(state.clone(), id.to_string(), owner.to_string(), request, study, options, supervision);
+                coordinate(state.clone(), id.to_string(), owner.to_string(), *request, study, options, supervision);
             Ok(Box::pin(work))
         }
-        "validation" => {
-            let job: ValidationJob = parse(request)?;
+        Job::Validation(job) => {
             let metamodel_id = job.metamodel_id.clone();
             sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
                 let inputs = held_inputs(study, &job.fixed)?;
@@ -117,8 +109,7 @@ async fn prepare(
             })
             .await
         }
-        "exceedance" => {
-            let job: ExceedanceJob = parse(request)?;
+        Job::Exceedance(job) => {
             let reference = reference_tasks(state, id, owner, &job.metamodel_id);
             let metamodel_id = job.metamodel_id.clone();
             sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
@@ -126,8 +117,7 @@ async fn prepare(
             })
             .await
         }
-        "hazard" | "fragility" | "sensitivity" | "serviceability" | "sweep" => {
-            let job: AnalysisJob = parse(request)?;
+        Job::Hazard(job) | Job::Fragility(job) | Job::Sensitivity(job) | Job::Serviceability(job) | Job::Sweep(job) => {
             let reference = reference_tasks(state, id, owner, &job.metamodel_id);
             let metamodel_id = job.metamodel_id.clone();
             sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
@@ -135,7 +125,6 @@ async fn prepare(
             })
             .await
         }
-        other => Err(Error::invalid("kind", format!("unknown job kind `{other}`"))),
     }
 }
 
@@ -147,9 +136,9 @@ async fn sampling_job<T: serde::Serialize>(
     supervision: Arc<Supervision>,
     answer: impl FnOnce(&Metamodel, &Study, &Supervision) -> Result<T> + Send + 'static,
 ) -> Result<WorkFuture> {
-    let loaded = stored_metamodel(state, metamodel_id, supervision.as_ref()).await?;
+    let loaded = state.metamodels.for_work(&state.store, metamodel_id, supervision.as_ref()).await?;
     Ok(Box::pin(blocking(move || {
-        let (metamodel, study) = (&loaded.0, &loaded.1);
+        let (metamodel, study) = (&loaded.metamodel, &loaded.study);
         let answer = answer(metamodel, study, supervision.as_ref())?;
         Ok((JobOutput::Answer(serde_json::to_string(&answer).expect("an answer serialises")), study.name.clone()))
     })))
@@ -223,7 +212,11 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
     let store: &Store = &state.store;
     let supervision = Arc::new(Supervision::default());
     let mut lease = LeaseKeeper::claimed(state.config.lease_ms);
-    let mut work = match prepare(state, &id, owner, kind, &request, supervision.clone()).await {
+    let prepared = match Job::stored(kind, &request) {
+        Ok(job) => prepare(state, &id, owner, job, supervision.clone()).await,
+        Err(error) => Err(error),
+    };
+    let mut work = match prepared {
         Ok(work) => work,
         Err(error) => {
             let reason = error.to_string();

@@ -1,5 +1,5 @@
-//! The HTTP service (axum on tokio): calibration jobs run by workers off the async runtime, stored
-//! metamodels, exceedance requests. The only module with tokio, axum and sqlx.
+//! The HTTP service (axum on tokio): calibrations and large analyses queued as jobs that workers
+//! run off the async runtime, stored metamodels, and the sampling requests answered from them. The only module with tokio, axum and sqlx.
 
 mod analyses;
 mod cache;
@@ -18,17 +18,18 @@ mod store;
 mod supervision;
 mod tasks;
 mod watch;
+mod work;
 
 pub use config::{LogFormat, Role, ServeArgs};
 pub use requests::{CalibrationRequest, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
 pub use routes::{openapi, openapi_for};
 
 use crate::error::{Error, Result};
-use cache::{Loaded, LoadedMetamodels};
+use cache::MetamodelCache;
 use routes::ApiKeys;
 use std::net::SocketAddr;
+use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
-use std::sync::{Arc, Mutex};
 use store::Store;
 use tokio::net::TcpListener;
 use tokio::sync::{Notify, Semaphore};
@@ -48,7 +49,7 @@ pub struct AppState {
     /// synchronous sampling stops.
     draining: Arc<AtomicBool>,
     /// Metamodels read back from the store, with their rebuilt studies, by id; bounded.
-    loaded: Arc<Mutex<LoadedMetamodels>>,
+    metamodels: Arc<MetamodelCache>,
     /// One permit per synchronous sampling request allowed to run; none left means 503.
     sampling: Arc<Semaphore>,
     /// One permit per open event stream on this replica; none left means 503.
@@ -78,7 +79,7 @@ impl Application {
             keys: Arc::new(keys),
             wake: Arc::new(Notify::new()),
             draining: Arc::new(AtomicBool::new(false)),
-            loaded: Arc::new(Mutex::new(LoadedMetamodels::new(config.loaded_metamodels))),
+            metamodels: Arc::new(MetamodelCache::new(config.loaded_metamodels)),
             sampling: Arc::new(Semaphore::new(config.sync_request_slots())),
             streams: Arc::new(Semaphore::new(config.max_event_streams)),
             config: Arc::new(config),

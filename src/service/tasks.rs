@@ -6,7 +6,6 @@
 
 use super::AppState;
 use super::CalibrationRequest;
-use super::cache::stored_metamodel;
 use super::lease::LeaseKeeper;
 use super::store::TaskRow;
 use super::supervision::{Supervision, blocking, through_faults};
@@ -92,9 +91,9 @@ async fn work(state: &AppState, request: &str, observer: Arc<Supervision>) -> Re
             .await
         }
         TaskRequest::ReferenceStorms(task) => {
-            let loaded = stored_metamodel(state, &task.metamodel_id, observer.as_ref()).await?;
+            let loaded = state.metamodels.for_work(&state.store, &task.metamodel_id, observer.as_ref()).await?;
             blocking(move || {
-                let (metamodel, study) = (&loaded.0, &loaded.1);
+                let (metamodel, study) = (&loaded.metamodel, &loaded.study);
                 let ReferenceStorms { seed, response, order, rows, storms, .. } = task;
                 let runs = PairedRuns { metamodel, study, seed, response, order };
                 let pairs = runs.run(&rows, &storms, observer.as_ref())?;

@@ -1,7 +1,8 @@
 //! The service's edge against a hostile client, over real HTTP: keys that cannot be empty, every
 //! cost-driving field refused before anything is queued, bodies that are not objects, bounded
 //! synchronous sampling (permits, timeout, a client that leaves), a cache that cannot undo a
-//! delete, idempotency keys that expire.
+//! delete, idempotency keys that expire, bodies far over the limit answered 413 that the client
+//! reads.
 
 use crate::harness::app::{TestApp, assert_problem, database, problem_details, spawn_app, spawn_app_configured};
 use crate::harness::fixture;
@@ -151,6 +152,56 @@ async fn hostile_sampling_requests_are_refused_and_a_delete_sticks() {
     assert_eq!(deleted.status().as_u16(), 204);
     let (s, ct, answer) = problem_details(app.post(&path, json!({"samples": 16})).await).await;
     assert_problem(s, &ct, &answer, 404, &id);
+    app.stop().await;
+}
+
+/// A body far over the limit (a thousand times the test server's 64 KiB) is answered 413
+/// problem+json that the client reads after sending all of it, with a declared length and chunked;
+/// a client that waits for `100 Continue` gets the 413 instead and sends nothing.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn a_body_far_over_the_limit_is_answered_413_that_the_client_reads() {
+    use tokio::io::{AsyncReadExt, AsyncWriteExt};
+    let app = spawn_app(&database("oversized")).await;
+    let host = app.address.trim_start_matches("http://").to_string();
+    let body = vec![b' '; 64 * 1024 * 1000];
+    for framing in ["content-length", "chunked", "expect"] {
+        let mut stream = tokio::net::TcpStream::connect(&host).await.unwrap();
+        let head = match framing {
+            "chunked" => "transfer-encoding: chunked\r\n".to_string(),
+            "expect" => format!("content-length: {}\r\nexpect: 100-continue\r\n", body.len()),
+            _ => format!("content-length: {}\r\n", body.len()),
+        };
+        let request =
+            format!("POST /v1/calibrations HTTP/1.1\r\nhost: {host}\r\ncontent-type: application/json\r\n{head}\r\n");
+        stream.write_all(request.as_bytes()).await.unwrap();
+        let (mut reader, mut writer) = stream.into_split();
+        let sending = {
+            let body = body.clone();
+            tokio::spawn(async move {
+                match framing {
+                    "expect" => Ok(()),
+                    "chunked" => {
+                        for chunk in body.chunks(1 << 20) {
+                            writer.write_all(format!("{:x}\r\n", chunk.len()).as_bytes()).await?;
+                            writer.write_all(chunk).await?;
+                            writer.write_all(b"\r\n").await?;
+                        }
+                        writer.write_all(b"0\r\n\r\n").await
+                    }
+                    _ => writer.write_all(&body).await,
+                }
+            })
+        };
+        let mut answer = Vec::new();
+        tokio::time::timeout(Duration::from_secs(60), reader.read_to_end(&mut answer)).await.unwrap().unwrap();
+        let sent = sending.await.unwrap();
+        assert!(sent.is_ok(), "{framing}: the body could not be sent whole: {sent:?}");
+        let answer = String::from_utf8_lossy(&answer).to_lowercase();
+        assert!(answer.starts_with("http/1.1 413"), "{framing}: {answer}");
+        assert!(answer.contains("content-type: application/problem+json"), "{framing}: {answer}");
+        assert!(answer.contains("connection: close"), "{framing}: {answer}");
+        assert!(answer.contains("request body too large"), "{framing}: {answer}");
+    }
     app.stop().await;
 }
 

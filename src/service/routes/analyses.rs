@@ -1,17 +1,16 @@
-//! Annual curves, fragility curves and Sobol indices of a stored metamodel: answered at once when
+//! Annual curves, fragility curves, Sobol indices, serviceability checks and sweeps of a stored
+//! metamodel: answered at once when
 //! small, as operations when large (see `sampling`).
 
 use super::ApiJson;
 use super::metamodels::load;
-use super::operations::OperationKind;
-use super::sampling::{Queued, SamplingResponses, Work, answer_or_queue};
+use super::sampling::{SamplingResponses, Work, answer_or_queue};
 use crate::analysis::OnThisMachine;
 use crate::service::AppState;
-use crate::service::analyses::{
-    AnalysisAnswer, AnalysisJob, AnalysisRequest, FragilityRequest, HazardRequest, SensitivityRequest,
-};
+use crate::service::analyses::{AnalysisAnswer, AnalysisRequest, FragilityRequest, HazardRequest, SensitivityRequest};
 use crate::service::checks::{ServiceabilityRequest, SweepRequest};
 use crate::service::error::ApiError;
+use crate::service::work::Job;
 use axum::extract::{Path, State};
 use axum::http::HeaderMap;
 use axum::response::Response as HttpResponse;
@@ -32,26 +31,15 @@ async fn analyse(
     state: AppState,
     id: String,
     headers: HeaderMap,
-    endpoint: &'static str,
     request: AnalysisRequest,
 ) -> Result<HttpResponse, ApiError> {
     let loaded = load(&state, &id).await?;
-    request.check(&state.config, &loaded.1)?;
+    request.check(&state.config, &loaded.study)?;
     // Reference storms take minutes: a certified answer is always an operation.
-    let storms = (request.reference_storms() == 0).then(|| request.storms(&loaded.1));
+    let storms = (request.reference_storms() == 0).then(|| request.storms(&loaded.study));
     let queued = {
         let (id, request) = (id.clone(), request.clone());
-        move || Queued {
-            endpoint,
-            kind: match request {
-                AnalysisRequest::Hazard(_) => OperationKind::Hazard,
-                AnalysisRequest::Fragility(_) => OperationKind::Fragility,
-                AnalysisRequest::Sensitivity(_) => OperationKind::Sensitivity,
-                AnalysisRequest::Serviceability(_) => OperationKind::Serviceability,
-                AnalysisRequest::Sweep(_) => OperationKind::Sweep,
-            },
-            job: serde_json::to_string(&AnalysisJob { metamodel_id: id, request }).expect("a job serialises"),
-        }
+        move || Job::analysis(id, request)
     };
     let work: Work = Box::new(move |metamodel, study, observer, rendering| {
         // Certified requests are operations: here no reference storm runs.
@@ -85,7 +73,7 @@ async fn hazard(
     headers: HeaderMap,
     ApiJson(request): ApiJson<HazardRequest>,
 ) -> Result<HttpResponse, ApiError> {
-    analyse(state, id, headers, "hazard", AnalysisRequest::Hazard(request)).await
+    analyse(state, id, headers, AnalysisRequest::Hazard(request)).await
 }
 
 /// Fragility curves P(peak > x | v) over storm speeds with their bands and lognormal fits: JSON or
@@ -110,7 +98,7 @@ async fn fragility(
     headers: HeaderMap,
     ApiJson(request): ApiJson<FragilityRequest>,
 ) -> Result<HttpResponse, ApiError> {
-    analyse(state, id, headers, "fragility", AnalysisRequest::Fragility(request)).await
+    analyse(state, id, headers, AnalysisRequest::Fragility(request)).await
 }
 
 /// First-order and total Sobol indices of a peak response for every random input and the storm's
@@ -132,7 +120,7 @@ async fn sensitivity(
     headers: HeaderMap,
     ApiJson(request): ApiJson<SensitivityRequest>,
 ) -> Result<HttpResponse, ApiError> {
-    analyse(state, id, headers, "sensitivity", AnalysisRequest::Sensitivity(request)).await
+    analyse(state, id, headers, AnalysisRequest::Sensitivity(request)).await
 }
 
 /// Criteria of comfort, drift and strength judged together under a site's climate: for each, the
@@ -162,7 +150,7 @@ async fn serviceability(
     headers: HeaderMap,
     ApiJson(request): ApiJson<ServiceabilityRequest>,
 ) -> Result<HttpResponse, ApiError> {
-    analyse(state, id, headers, "serviceability", AnalysisRequest::Serviceability(request)).await
+    analyse(state, id, headers, AnalysisRequest::Serviceability(request)).await
 }
 
 /// The T-year level of a response with one input held at each of several values, every other input
@@ -189,5 +177,5 @@ async fn sweep(
     headers: HeaderMap,
     ApiJson(request): ApiJson<SweepRequest>,
 ) -> Result<HttpResponse, ApiError> {
-    analyse(state, id, headers, "sweep", AnalysisRequest::Sweep(request)).await
+    analyse(state, id, headers, AnalysisRequest::Sweep(request)).await
 }

@@ -2,7 +2,8 @@
 
 use super::{ApiJson, accept_job};
 use crate::service::error::{ApiError, ProblemDetails};
-use crate::service::routes::operations::{Operation, OperationKind};
+use crate::service::routes::operations::Operation;
+use crate::service::work::Job;
 use crate::service::{AppState, CalibrationRequest};
 use axum::extract::State;
 use axum::http::HeaderMap;
@@ -34,6 +35,5 @@ async fn start_calibration(
     // Resolving builds the study (an eigen-analysis, a spectral table): off the runtime.
     let (checked, config) = (request.clone(), state.config.clone());
     tokio::task::spawn_blocking(move || checked.resolve(&config).map(|_| ())).await.map_err(ApiError::internal)??;
-    let text = serde_json::to_string(&request).expect("a request serialises");
-    accept_job(&state, &headers, "calibrations", OperationKind::Calibration, text).await
+    accept_job(&state, &headers, Job::Calibration(Box::new(request))).await
 }

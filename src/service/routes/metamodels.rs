@@ -1,14 +1,16 @@
-//! Stored metamodels, and the exceedance curves sampled from them.
+//! Stored metamodels, the exceedance curves and demand samples drawn from them, and their
+//! validation against the reference model.
 
-use super::sampling::{Queued, SamplingResponses, Work, answer_now, answer_or_queue};
+use super::sampling::{SamplingResponses, Work, answer_now, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
 use crate::analysis::OnThisMachine;
-use crate::service::cache::rebuilt;
+use crate::service::cache::Loaded;
 use crate::service::demands::DemandsRequest;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
-use crate::service::routes::operations::{Operation, OperationKind};
+use crate::service::routes::operations::Operation;
+use crate::service::work::Job;
 use crate::service::{AppState, MAX_VALIDATION_SAMPLES, ValidationJob, ValidationRequest};
 use crate::surrogate::Metamodel;
 use axum::Json;
@@ -16,7 +18,6 @@ use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode, header};
 use axum::response::{IntoResponse, Response as HttpResponse};
 use serde::Serialize;
-use std::sync::Arc;
 use utoipa::ToSchema;
 use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
@@ -90,29 +91,14 @@ async fn delete_metamodel(State(state): State<AppState>, Path(id): Path<String>)
     if !state.store.delete_metamodel(&id).await? {
         return Err(ApiError::not_found("metamodel", &id));
     }
-    state.loaded.lock().expect("cache lock").remove(&id);
+    state.metamodels.forget(&id);
     Ok(StatusCode::NO_CONTENT)
 }
 
-/// A stored metamodel and its rebuilt study, cached by id. A cached one is still looked up in the
-/// store (one indexed read), so a delete through another replica is seen at once.
-pub async fn load(state: &AppState, id: &str) -> Result<crate::service::Loaded, ApiError> {
-    let (cached, generation) = {
-        let mut loaded = state.loaded.lock().expect("cache lock");
-        (loaded.get(id), loaded.generation())
-    };
-    if let Some(found) = cached {
-        if state.store.metamodel_exists(id).await? {
-            return Ok(found);
-        }
-        state.loaded.lock().expect("cache lock").remove(id);
-        return Err(ApiError::not_found("metamodel", id));
-    }
-    let body = state.store.metamodel_body(id).await?.ok_or_else(|| ApiError::not_found("metamodel", id))?;
-    let loaded = tokio::task::spawn_blocking(move || rebuilt(&body)).await.map_err(ApiError::internal)??;
-    let loaded = Arc::new(loaded);
-    state.loaded.lock().expect("cache lock").insert(id, loaded.clone(), generation);
-    Ok(loaded)
+/// A stored metamodel and its rebuilt study, from this replica's cache (see
+/// [`MetamodelCache::for_request`](crate::service::cache::MetamodelCache::for_request)).
+pub async fn load(state: &AppState, id: &str) -> Result<Loaded, ApiError> {
+    state.metamodels.for_request(&state.store, id).await
 }
 
 /// The peak-response exceedance curve with its band, sampled from the metamodel: JSON, CSV or SVG
@@ -141,16 +127,12 @@ async fn exceedance_curve(
 ) -> Result<HttpResponse, ApiError> {
     request.check(&state.config)?;
     let loaded = load(&state, &id).await?;
-    request.check_against(&loaded.1)?;
+    request.check_against(&loaded.study)?;
     // Reference storms take minutes: a certified curve is always an operation.
     let storms = if request.certify.is_some() { None } else { Some(request.samples) };
     let queued = {
         let (id, request) = (id.clone(), request.clone());
-        move || Queued {
-            endpoint: "exceedance",
-            kind: OperationKind::Exceedance,
-            job: serde_json::to_string(&ExceedanceJob { metamodel_id: id, request }).expect("a job serialises"),
-        }
+        move || Job::Exceedance(ExceedanceJob { metamodel_id: id, request })
     };
     let work: Work = Box::new(move |metamodel, study, observer, rendering| {
         // Certified requests are operations: here no reference storm runs.
@@ -213,7 +195,7 @@ async fn start_validation(
         );
     }
     let loaded = load(&state, &id).await?;
-    let storm_steps = request.samples as f64 * loaded.1.storm.steps() as f64;
+    let storm_steps = request.samples as f64 * loaded.study.storm.steps() as f64;
     if storm_steps > state.config.max_job_steps as f64 {
         return Err(crate::error::Error::invalid(
             "samples",
@@ -224,8 +206,7 @@ async fn start_validation(
         )
         .into());
     }
-    held_inputs(&loaded.1, &request.fixed)?;
+    held_inputs(&loaded.study, &request.fixed)?;
     let queued = ValidationJob { metamodel_id: id, samples: request.samples, seed: request.seed, fixed: request.fixed };
-    let text = serde_json::to_string(&queued).expect("a job serialises");
-    accept_job(&state, &headers, "validations", OperationKind::Validation, text).await
+    accept_job(&state, &headers, Job::Validation(queued)).await
 }

@@ -8,6 +8,7 @@ use crate::service::analyses::AnalysisAnswer;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::exceedance::ExceedanceAnswer;
 use crate::service::store::JobRow;
+use crate::service::work::{Job, OperationKind};
 use axum::Json;
 use axum::extract::{Path, State};
 use axum::response::sse::{Event, KeepAlive, Sse};
@@ -30,35 +31,6 @@ pub fn router() -> OpenApiRouter<AppState> {
         .routes(routes!(operation_events))
 }
 
-/// What kind of work an operation does.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum OperationKind {
-    Calibration,
-    Validation,
-    Exceedance,
-    Hazard,
-    Fragility,
-    Sensitivity,
-    Serviceability,
-    Sweep,
-}
-
-impl OperationKind {
-    pub fn as_str(self) -> &'static str {
-        match self {
-            OperationKind::Calibration => "calibration",
-            OperationKind::Validation => "validation",
-            OperationKind::Exceedance => "exceedance",
-            OperationKind::Hazard => "hazard",
-            OperationKind::Fragility => "fragility",
-            OperationKind::Sensitivity => "sensitivity",
-            OperationKind::Serviceability => "serviceability",
-            OperationKind::Sweep => "sweep",
-        }
-    }
-}
-
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, ToSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum OperationState {
@@ -78,8 +50,7 @@ pub enum OperationResult {
     Analysis(Box<AnalysisAnswer>),
 }
 
-/// Long-running work (a calibration, a validation, a large exceedance, hazard, fragility or
-/// sensitivity request).
+/// Long-running work: a calibration, a validation, or a large or certified sampling request.
 #[derive(Debug, Clone, Serialize, ToSchema)]
 pub struct Operation {
     pub id: String,
@@ -115,15 +86,10 @@ fn stored<T: serde::de::DeserializeOwned>(text: &str) -> Result<T, ApiError> {
     serde_json::from_str(text).map_err(ApiError::internal)
 }
 
-/// The metamodel named in a validation's or an analysis's job (its other fields left unread).
-#[derive(serde::Deserialize)]
-struct WorksOn {
-    metamodel_id: Option<String>,
-}
-
 /// The public view of a job.
 pub fn operation(row: &JobRow) -> Result<Operation, ApiError> {
-    let kind: OperationKind = stored(&format!("\"{}\"", row.kind))?;
+    let job = Job::stored(&row.kind, &row.request)?;
+    let kind = job.kind();
     let state: OperationState = stored(&format!("\"{}\"", row.state))?;
     let result = match (&row.result, kind) {
         (None, _) | (Some(_), OperationKind::Calibration) => None,
@@ -145,9 +111,9 @@ pub fn operation(row: &JobRow) -> Result<Operation, ApiError> {
         done: matches!(state, OperationState::Succeeded | OperationState::Failed | OperationState::Cancelled),
         progress: row.progress.as_deref().map(stored).transpose()?,
         error: row.error.clone(),
-        metamodel_id: match kind {
-            OperationKind::Calibration => row.metamodel_id.clone(),
-            _ => stored::<WorksOn>(&row.request)?.metamodel_id,
+        metamodel_id: match &job {
+            Job::Calibration(_) => row.metamodel_id.clone(),
+            other => other.metamodel_id().map(str::to_string),
         },
         result,
         attempts: row.attempts,

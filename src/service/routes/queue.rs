@@ -1,9 +1,10 @@
 //! Queuing work: a job inserted under its idempotency key, answered 202 with its operation.
 
-use super::operations::{self, OperationKind};
+use super::operations;
 use crate::service::AppState;
 use crate::service::error::ApiError;
 use crate::service::store::Enqueued;
+use crate::service::work::Job;
 
 /// How long a client should wait before offering work to a full queue again (s).
 const QUEUE_FULL_RETRY_S: u64 = 30;
@@ -30,15 +31,14 @@ pub fn idempotency_key(headers: &axum::http::HeaderMap) -> Result<Option<String>
 pub async fn accept_job(
     state: &AppState,
     headers: &axum::http::HeaderMap,
-    endpoint: &str,
-    kind: OperationKind,
-    request: String,
+    job: Job,
 ) -> Result<axum::response::Response, ApiError> {
     use axum::http::{StatusCode, header};
     use axum::response::IntoResponse;
     let key = idempotency_key(headers)?;
     let new_id = uuid::Uuid::new_v4().to_string();
-    let idempotency = key.as_deref().map(|k| (k, endpoint));
+    let (kind, request) = (job.kind(), job.request_json());
+    let idempotency = key.as_deref().map(|k| (k, job.idempotency_scope()));
     let max_queued = state.config.max_queued_jobs as i64;
     let keys_since = state.config.idempotency_keys_since_ms();
     let id = match state.store.insert_job(&new_id, kind.as_str(), &request, idempotency, keys_since, max_queued).await?

@@ -3,7 +3,7 @@
 //! operation when it is large or the client prefers.
 
 use super::accept_job;
-use super::operations::{Operation, OperationKind};
+use super::operations::Operation;
 use super::queue::idempotency_key;
 use crate::progress::Observer;
 use crate::service::AppState;
@@ -11,6 +11,7 @@ use crate::service::cache::Loaded;
 use crate::service::error::{ApiError, ProblemDetails};
 use crate::service::rendering::Rendering;
 use crate::service::watch::{RequestWatch, StopOnDrop};
+use crate::service::work::Job;
 use crate::study::Study;
 use crate::surrogate::Metamodel;
 use axum::http::{HeaderMap, header};
@@ -30,35 +31,27 @@ fn prefers_async(headers: &HeaderMap) -> bool {
         .any(|v| v.split(',').any(|p| p.trim().eq_ignore_ascii_case("respond-async")))
 }
 
-/// A request as it would be queued: the endpoint its idempotency keys belong to, its kind, and
-/// the job's JSON.
-pub struct Queued {
-    pub endpoint: &'static str,
-    pub kind: OperationKind,
-    pub job: String,
-}
-
 /// The rendered answer of a synchronous request, made on a blocking thread.
 pub type Work = Box<
     dyn FnOnce(&Metamodel, &Study, &dyn Observer, Rendering) -> crate::error::Result<(&'static str, String)> + Send,
 >;
 
 /// Answers with `work` at once when its metamodel `storms` are within the synchronous limit and
-/// the client did not prefer otherwise; queues `queued` as an operation (202) when not, and always
+/// the client did not prefer otherwise; queues the job `queued` makes as an operation (202) when
+/// not, and always
 /// when `storms` is `None` (a request that runs reference storms too).
 pub async fn answer_or_queue(
     state: &AppState,
     headers: &HeaderMap,
     loaded: Loaded,
     storms: Option<usize>,
-    queued: impl FnOnce() -> Queued,
+    queued: impl FnOnce() -> Job,
     work: Work,
 ) -> Result<HttpResponse, ApiError> {
     // A key is only used when the request is queued, but a malformed one is refused either way.
     idempotency_key(headers)?;
     if storms.is_none_or(|storms| storms > state.config.max_sync_samples) || prefers_async(headers) {
-        let Queued { endpoint, kind, job } = queued();
-        return accept_job(state, headers, endpoint, kind, job).await;
+        return accept_job(state, headers, queued()).await;
     }
     answer_now(state, headers, loaded, work).await
 }
@@ -87,7 +80,7 @@ pub async fn answer_now(
         tokio::task::spawn_blocking(move || {
             // Held until the sampling has stopped, whatever became of the request.
             let _permit = permit;
-            let (metamodel, study) = loaded.as_ref();
+            let (metamodel, study) = (&loaded.metamodel, &loaded.study);
             work(metamodel, study, watch.as_ref(), rendering)
         })
     };

@@ -59,7 +59,7 @@ pub struct StudyInput {
 async fn get_study(State(state): State<AppState>, Path(id): Path<String>) -> Result<Json<Study>, ApiError> {
     let loaded = load(&state, &id).await?;
     let study = tokio::task::spawn_blocking(move || -> crate::error::Result<Study> {
-        let (metamodel, study) = &*loaded;
+        let (metamodel, study) = (&loaded.metamodel, &loaded.study);
         let inputs = study
             .inputs
             .inputs
