@@ -8,7 +8,9 @@
 //! 1.000 with α = 1). The velocity term D(Δ) = Δ·(Δ² + κ²)^((α−1)/2) of the first difference
 //! Δ = y(t − l) − y(t − l − 1) is that law. The knee κ smooths it near Δ = 0, where a damper's
 //! velocity is not one mode's (the other modes' velocities cross zero elsewhere) and where the
-//! pure law's slope is infinite (which the refinement's sensitivities could not follow).
+//! pure law's slope is infinite (which the refinement's sensitivities could not follow). The
+//! secant S(Δ) = D(Δ)/Δ carries the law to a mode whose dampers' velocities another mode makes
+//! ([`super::narx::DamperTerm::Modulated`]).
 //!
 //! The power is [`crate::dynamics::power`], arithmetic and bit operations only, so that the
 //! calibration's scalar recursions and the batched free run compute the same value on every
@@ -74,7 +76,7 @@ pub fn law_lanes<const N: usize>(difference: [f64; N], knee: f64, exponent: f64)
 }
 
 #[inline(always)]
-fn secant_lanes<const N: usize>(difference: [f64; N], knee: f64, exponent: f64) -> [f64; N] {
+pub fn secant_lanes<const N: usize>(difference: [f64; N], knee: f64, exponent: f64) -> [f64; N] {
     let squares = std::array::from_fn(|l| difference[l].mul_add(difference[l], knee * knee));
     power_lanes(squares, (exponent - 1.0) / 2.0)
 }

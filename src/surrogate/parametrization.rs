@@ -29,7 +29,8 @@ pub enum Parametrization {
     StableGains,
 }
 
-fn linear_outputs(terms: &[NarxTerm]) -> Vec<usize> {
+/// The mode's own autoregressive terms c·y(t − l), by lag.
+pub(super) fn linear_outputs(terms: &[NarxTerm]) -> Vec<usize> {
     let mut idx: Vec<usize> =
         (0..terms.len()).filter(|&i| terms[i].reads_own_output() && terms[i].is_linear_output()).collect();
     idx.sort_by_key(|&i| terms[i].output_lag);

@@ -11,7 +11,8 @@ use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::Vector;
 use crate::simd::{LANES, Lanes};
-use crate::surrogate::damper_law::law_lanes;
+use crate::surrogate::damper_law::secant_lanes;
+use crate::surrogate::narx::DamperTerm;
 use crate::surrogate::narx::DIVERGENCE_BOUND;
 use crate::wind::CubicSchedule;
 
@@ -43,11 +44,14 @@ pub(super) struct DenseLinear {
     law: Option<DenseLaw>,
 }
 
-/// The terms c·D(Δ_s) of the dampers' law, Δ_s = y_s(t − 1) − y_s(t − 2): one power per source mode
+/// The terms c·D(Δ_s) = c·Δ_s·S(Δ_s) of the dampers' law, Δ_s = y_s(t − 1) − y_s(t − 2), and
+/// c·Δ_m·S(Δ_s), mode m's own velocity at the law's secant at mode s's: one power per source mode
 /// and step, shared by every mode that reads it.
 struct DenseLaw {
     /// coefficient[m·M + s]: coefficient of D(Δ_s) in mode m.
     coefficient: Vec<Lanes>,
+    /// modulated[m·M + s]: coefficient of Δ_m·S(Δ_s) in mode m (s ≠ m).
+    modulated: Vec<Lanes>,
     /// Whether any mode reads D(Δ_s).
     read: Vec<bool>,
     /// κ_s, the law's knee of each source mode.
@@ -89,12 +93,16 @@ impl DenseLinear {
                         let source = t.output_mode.unwrap_or(m);
                         let dense_law = dense.law.get_or_insert_with(|| DenseLaw {
                             coefficient: vec![[0.0; LANES]; modes * modes],
+                            modulated: vec![[0.0; LANES]; modes * modes],
                             read: vec![false; modes],
                             knees: law.knees.clone(),
                             exponent: law.exponent,
                         });
                         dense_law.read[source] = true;
-                        &mut dense_law.coefficient[m * modes + source]
+                        match t.damper {
+                            Some(DamperTerm::Modulated) if source != m => &mut dense_law.modulated[m * modes + source],
+                            _ => &mut dense_law.coefficient[m * modes + source],
+                        }
                     }
                     _ => return None,
                 };
@@ -203,10 +211,14 @@ fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOW
     }
     let minus_one = V::splat(isa, -1.0);
     let mut law_coefficient = [[zero; M]; M];
+    let mut modulated_coefficient = [[zero; M]; M];
+    let mut modulated = false;
     if let Some(law) = &dense.law {
         for m in 0..M {
             for s in 0..M {
                 law_coefficient[m][s] = V::load(isa, &law.coefficient[m * M + s]);
+                modulated_coefficient[m][s] = V::load(isa, &law.modulated[m * M + s]);
+                modulated |= law.modulated[m * M + s].iter().any(|c| *c != 0.0);
             }
         }
     }
@@ -224,18 +236,28 @@ fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOW
             }
             let mut next = constant;
             if let Some(law) = &dense.law {
-                // D(Δ_s) of every lane, vectorised, as the scalar free run and the term lists form it.
-                let mut laws = [zero; M];
+                // D(Δ_s) = Δ_s·S(Δ_s) of every lane, vectorised, as the scalar free run and the term
+                // lists form it; with modulated terms Δ_m·S(Δ_s) from the same secants.
+                let mut differences = [zero; M];
+                let mut secants = [zero; M];
                 for s in 0..M {
+                    differences[s] = minus_one.mul_add(before[s], last[s]);
                     if law.read[s] {
                         let mut difference = [0.0; LANES];
-                        minus_one.mul_add(before[s], last[s]).store(&mut difference);
-                        laws[s] = V::load(isa, &law_lanes(difference, law.knees[s], law.exponent));
+                        differences[s].store(&mut difference);
+                        secants[s] = V::load(isa, &secant_lanes(difference, law.knees[s], law.exponent));
                     }
                 }
                 for m in 0..M {
                     for s in 0..M {
-                        next[m] = law_coefficient[m][s].mul_add(laws[s], next[m]);
+                        next[m] = law_coefficient[m][s].mul_add(differences[s].mul(secants[s]), next[m]);
+                    }
+                }
+                if modulated {
+                    for m in 0..M {
+                        for s in 0..M {
+                            next[m] = modulated_coefficient[m][s].mul_add(differences[m].mul(secants[s]), next[m]);
+                        }
                     }
                 }
             }

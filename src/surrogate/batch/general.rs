@@ -8,7 +8,8 @@ use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::{LANES, Lanes};
-use crate::surrogate::damper_law::law_lanes;
+use crate::surrogate::damper_law::{law_lanes, secant_lanes};
+use crate::surrogate::narx::DamperTerm;
 
 /// A term with its sources resolved and its coefficient in every lane.
 #[derive(Debug, Clone, Copy)]
@@ -22,10 +23,12 @@ struct Term {
     coefficient: Lanes,
 }
 
-/// A damper term c·D(Δ_source), Δ the first difference at `lag`, with the source mode's knee.
+/// A damper term: c·D(Δ_source), or with `modulated` c·Δ_own·S(Δ_source), Δ the first difference
+/// at `lag` and the law's knee the source mode's.
 #[derive(Debug, Clone, Copy)]
 struct LawTerm {
     source: usize,
+    modulated: bool,
     lag: usize,
     knee: f64,
     coefficient: Lanes,
@@ -70,10 +73,11 @@ impl TermLists {
                     input_power: t.input_power,
                     coefficient: coefficient(m, k),
                 };
-                if t.damper.is_some() {
+                if let Some(kind) = t.damper {
                     let law = program.law.expect("a damper term runs with its damper law");
                     lists.damper[m].push(LawTerm {
                         source: term.source,
+                        modulated: kind == DamperTerm::Modulated && term.source != m,
                         lag: t.output_lag,
                         knee: law.knees[term.source],
                         coefficient: term.coefficient,
@@ -170,12 +174,18 @@ fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: 
                 }
             }
             for term in &lists.damper[m] {
-                let near = &outputs[here - term.lag * modes + term.source];
-                let far = &outputs[here - (term.lag + 1) * modes + term.source];
-                let difference: Lanes = std::array::from_fn(|l| near[l] - far[l]);
-                let law = law_lanes(difference, term.knee, lists.exponent);
+                let (near, far) = (here - term.lag * modes, here - (term.lag + 1) * modes);
+                let (source_near, source_far) = (&outputs[near + term.source], &outputs[far + term.source]);
+                let source_difference: Lanes = std::array::from_fn(|l| source_near[l] - source_far[l]);
+                let g = if term.modulated {
+                    let (own_near, own_far) = (&outputs[near + m], &outputs[far + m]);
+                    let secants = secant_lanes(source_difference, term.knee, lists.exponent);
+                    std::array::from_fn(|l| (own_near[l] - own_far[l]) * secants[l])
+                } else {
+                    law_lanes(source_difference, term.knee, lists.exponent)
+                };
                 for l in 0..LANES {
-                    value[l] = term.coefficient[l].mul_add(law[l], value[l]);
+                    value[l] = term.coefficient[l].mul_add(g[l], value[l]);
                 }
             }
             for term in &lists.feedback[m] {

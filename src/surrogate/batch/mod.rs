@@ -208,9 +208,10 @@ mod tests {
         assert!(dense[0].iter().any(|v| v.abs() > 0.1));
     }
 
-    /// Damper terms (a mode's own law and another's) run in the batch as in the scalar free run the
-    /// calibration fits them with: by the dense recursion, and by the term lists when another term
-    /// (a cubic stiffness) keeps the models out of it.
+    /// Damper terms (a mode's own law, another's, and the own velocity at another's secant) run
+    /// in the batch as in the scalar free run the calibration fits them with: by the dense
+    /// recursion, and by the term lists when another term (a cubic stiffness) keeps the models out
+    /// of it.
     #[test]
     fn damper_terms_run_as_in_the_scalar_free_run() {
         use crate::surrogate::narx::DamperTerm;
@@ -226,8 +227,9 @@ mod tests {
             NarxTerm::output(1, 1, None),
             NarxTerm::output(2, 1, None),
             NarxTerm::damper(DamperTerm::Law, 1, Some(0)),
+            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
         ];
-        let theta = vec![vec![0.004, 1.985, -0.9905, -0.003], vec![0.02, 1.95, -0.96, 0.002]];
+        let theta = vec![vec![0.004, 1.985, -0.9905, -0.003], vec![0.02, 1.95, -0.96, 0.002, -0.01]];
         let dense = |programs: &[ModeProgram]| DenseLinear::new(programs, |_, _| [0.0; LANES]).is_some();
         let programs = [
             ModeProgram { terms: &a, input_scale: 1.0, law: Some(&law) },
