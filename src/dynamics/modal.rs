@@ -29,7 +29,7 @@ impl ModalResponse {
         (0..steps).map(|i| self.displacements.iter().map(|y| y[i]).sum()).collect()
     }
 
-    /// The motion, as the responses of [`super::motion`] take it.
+    /// The motion, as the floor accelerations and damper forces are computed from it.
     pub fn motion(self) -> ModalMotion {
         ModalMotion { displacements: self.displacements, velocities: self.velocities }
     }

@@ -224,7 +224,7 @@ const PARSIMONY_FACTOR: f64 = 1.1;
 /// a path of growing active sets; every prefix (with the constant) is a candidate; each candidate is
 /// fitted by one-step least squares on the `evaluation` records and scored by its mean free-run
 /// error; a candidate that diverges on any of them is rejected. The smallest candidate within
-/// [`PARSIMONY_FACTOR`] of the best is then pruned by backward elimination. The dictionary's damper
+/// `PARSIMONY_FACTOR` of the best is then pruned by backward elimination. The dictionary's damper
 /// terms then enter one at a time, each the one that lowers the free-run error most, while that
 /// lowers it by more than the same factor: they do not go through LARS, whose one-step fit takes
 /// the law of the velocity for the second lag it nearly is and builds paths whose free runs diverge.

@@ -62,7 +62,7 @@ impl StaticResponse {
 pub struct ModalBasis {
     pub frequencies_rad_s: Vec<f64>,
     pub modal_masses_kg: Vec<f64>,
-    /// shapes[mode][floor].
+    /// `shapes[mode][floor]`.
     pub shapes: Vec<Vec<f64>>,
 }
 

@@ -17,7 +17,7 @@ pub struct ModeProgram<'a> {
 
 /// One sample of a batch: its coefficients and forces.
 pub struct BatchSample<'a> {
-    /// theta[m]: the NARX coefficients of mode m, in the order of its terms.
+    /// `theta[m]`: the NARX coefficients of mode m, in the order of its terms.
     pub theta: Vec<Vec<f64>>,
     pub forces: &'a dyn ForceSource,
 }

@@ -44,8 +44,9 @@ pub enum Reduction<'a> {
 /// Builds a batch's [`MotionSink`] from its lanes' physical inputs and its blocks' scales.
 pub type SinkFactory<'a> = dyn Fn(&[&[f64]], &ModalScales) -> Result<Box<dyn MotionSink>> + Sync + 'a;
 
-/// The scales of the free run's blocks, per mode: the output ŷ_m is (y_m − levels[m])/outputs[m]
-/// and the input q̂_m is (Q_m − Q̄_m)/inputs[m], `levels[m]` the static level of every lane.
+/// The scales of the free run's blocks, per mode: the output ŷ_m is
+/// (y_m − `levels[m]`)/`outputs[m]` and the input q̂_m is (Q_m − Q̄_m)/`inputs[m]`, `levels[m]`
+/// the static level of every lane.
 #[derive(Debug, Clone)]
 pub struct ModalScales {
     pub outputs: Vec<f64>,
