@@ -18,7 +18,9 @@ use crate::wind::ModalForces;
 /// Σ_m y_m is the roof displacement), and the integrator's velocities ẏ_m(t).
 #[derive(Debug, Clone)]
 pub struct ModalResponse {
+    /// Modal displacements y_m (m), `[mode][step]`.
     pub displacements: Vec<Vec<f64>>,
+    /// Modal velocities ẏ_m (m/s), `[mode][step]`.
     pub velocities: Vec<Vec<f64>>,
 }
 
