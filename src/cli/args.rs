@@ -7,6 +7,7 @@ use crate::uncertainty::{InputModel, parse_assignment};
 use clap::Args;
 use std::path::PathBuf;
 
+/// The study a command runs on: a preset or a spec file, with command-line overrides.
 #[derive(Debug, Clone, Args)]
 pub struct StudyArgs {
     /// Built-in study: frame40 (dampers as printed, N·s/m) or frame40-kn (the same numbers in kN·s/m).
@@ -62,8 +63,10 @@ impl StudyArgs {
 /// A metamodel sampled with some inputs held, as exceedance curves and profiles take it.
 #[derive(Debug, Clone, Args)]
 pub struct SamplingArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
+    /// Storms sampled from the metamodel, one input sample each.
     #[arg(long, default_value_t = 10_000)]
     pub samples: usize,
     /// Hold the mean wind speed (m/s): an answer conditional on it.
@@ -140,6 +143,7 @@ impl CertifyArgs {
 /// The seed, the band's level and the output of an analysis command.
 #[derive(Debug, Clone, Args)]
 pub struct AnalysisArgs {
+    /// Seed of the input samples and of the storms' wind.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Confidence level of the bands and intervals.

@@ -13,12 +13,16 @@ use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta exceedance` samples, at which thresholds, and how it is certified.
 #[derive(Debug, Clone, Args)]
 pub struct ExceedanceArgs {
+    /// The metamodel, the storms sampled and the inputs held.
     #[command(flatten)]
     pub sampling: SamplingArgs,
+    /// Seed of the input samples and of the storms' wind.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The peak response whose curve is computed.
     #[command(flatten)]
     pub response: ResponseArgs,
     /// Thresholds in the response's unit (m, m/s² or N), comma separated; automatic when absent.
@@ -27,6 +31,7 @@ pub struct ExceedanceArgs {
     /// Confidence level of the band.
     #[arg(long, default_value_t = 0.95)]
     pub confidence: f64,
+    /// Whether the curve is certified by reference storms.
     #[command(flatten)]
     pub certify: CertifyArgs,
     /// Write the curve: .csv, .json or .svg by extension.
@@ -34,6 +39,7 @@ pub struct ExceedanceArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Runs `windmeta exceedance`: the curve with its band.
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
     check_confidence(args.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;

@@ -4,6 +4,8 @@
 //! A [`Structure`] is always valid once built: square symmetric matrices of the same size, a positive
 //! definite stiffness and mass, increasing floor elevations. Everything downstream relies on that.
 
+#![warn(missing_docs)]
+
 mod custom;
 mod frame;
 mod modes;
@@ -93,6 +95,7 @@ impl Structure {
         Ok(Structure { stiffness, mass, floor_elevations, floor_widths, reference_youngs_modulus, dampers })
     }
 
+    /// Number of floors: the lateral degrees of freedom.
     pub fn floors(&self) -> usize {
         self.floor_elevations.len()
     }

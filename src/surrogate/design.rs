@@ -47,7 +47,9 @@ impl WindCoverage {
 /// The experiments' physical inputs and the weights of their least-squares fits (mean 1).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Design {
+    /// Physical inputs of each experiment, in the input model's order.
     pub points: Vec<Vec<f64>>,
+    /// Weight of each experiment in the least-squares fits (mean 1).
     pub weights: Vec<f64>,
 }
 

@@ -16,9 +16,13 @@ use serde::{Deserialize, Serialize};
 pub struct CalibrationOptions {
     /// Experiments K of the Latin-hypercube design.
     pub experiments: usize,
+    /// Seed of the Latin-hypercube design and of the experiments' storms.
     pub seed: u64,
+    /// The NARX dictionary and its structure selection.
     pub narx: NarxOptions,
+    /// The polynomial chaos expansions of the coefficients.
     pub pce: PceOptions,
+    /// How each experiment's coefficients are refined on the simulation error.
     pub refinement: Refinement,
     /// Experiments on which candidate structures are compared (evenly spread over the design).
     pub selection_experiments: usize,
@@ -51,6 +55,7 @@ impl Default for CalibrationOptions {
 pub const MAX_EXPERIMENTS: usize = 5000;
 
 impl CalibrationOptions {
+    /// Refuses options outside their bounds, naming the field.
     pub fn validate(&self) -> Result<()> {
         if !(4..=MAX_EXPERIMENTS).contains(&self.experiments) {
             return Err(Error::invalid(
@@ -74,8 +79,10 @@ impl CalibrationOptions {
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct WindCoverage {
+    /// Lowest speed to cover (m/s).
     #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
     pub lower: f64,
+    /// Highest speed to cover (m/s).
     #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
     pub upper: f64,
 }
@@ -84,6 +91,7 @@ pub struct WindCoverage {
 const MAX_SPEED: f64 = 150.0;
 
 impl WindCoverage {
+    /// Refuses speeds outside (0, 150] m/s or a lower speed not below the upper.
     pub fn validate(&self) -> Result<()> {
         let field = "cover_wind_speeds";
         if !(self.lower.is_finite() && self.upper.is_finite() && self.lower > 0.0 && self.upper <= MAX_SPEED) {

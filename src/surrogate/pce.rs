@@ -52,6 +52,7 @@ impl Default for PceOptions {
 }
 
 impl PceOptions {
+    /// Refuses options outside their bounds, naming the field.
     pub fn validate(&self) -> Result<()> {
         if !(1..=20).contains(&self.max_degree) {
             return Err(Error::invalid("pce.max_degree", format!("must be between 1 and 20, got {}", self.max_degree)));
@@ -104,6 +105,7 @@ pub struct SparsePce {
     /// The retained terms, each a list of [input index, degree] pairs; the empty term is the constant.
     #[cfg_attr(feature = "openapi", schema(value_type = Vec<Vec<Vec<u64>>>))]
     pub terms: Vec<Term>,
+    /// Coefficient of each retained term, in the order of `terms`.
     pub coefficients: Vec<f64>,
     /// Total degree of the candidate basis the terms were chosen from.
     pub degree: usize,

@@ -11,35 +11,51 @@ use statrs::function::gamma::gamma;
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(tag = "distribution", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Marginal {
+    /// Normal, given by its mean and standard deviation.
     Normal {
+        /// Mean, in the input's unit.
         mean: f64,
+        /// Standard deviation, in the input's unit.
         sd: f64,
     },
     /// Lognormal given by the mean and standard deviation of the variable itself.
     Lognormal {
+        /// Mean of the variable (not of its logarithm).
         mean: f64,
+        /// Standard deviation of the variable (not of its logarithm).
         sd: f64,
     },
+    /// Uniform between two bounds.
     Uniform {
+        /// Lower bound.
         lower: f64,
+        /// Upper bound, above `lower`.
         upper: f64,
     },
     /// Fréchet (extreme value type II, location 0) given by its mean and standard deviation.
     Frechet {
+        /// Mean, in the input's unit.
         mean: f64,
+        /// Standard deviation, at most the mean.
         sd: f64,
     },
     /// Gumbel (extreme value type I): F(x) = exp(−exp(−(x − location)/scale)).
     Gumbel {
+        /// Location μ: the mode.
         location: f64,
+        /// Scale β, positive.
         scale: f64,
     },
     /// Weibull (location 0) given by its mean and standard deviation.
     Weibull {
+        /// Mean, in the input's unit.
         mean: f64,
+        /// Standard deviation, in the input's unit.
         sd: f64,
     },
+    /// Not random: always `value`.
     Constant {
+        /// The value held.
         value: f64,
     },
 }
@@ -105,6 +121,7 @@ impl Marginal {
         Ok(())
     }
 
+    /// Mean of the distribution.
     pub fn mean(&self) -> f64 {
         match *self {
             Marginal::Normal { mean, .. }
@@ -140,6 +157,7 @@ impl Marginal {
         }
     }
 
+    /// The standard variable this marginal maps to.
     pub fn standard_space(&self) -> StandardSpace {
         match self {
             Marginal::Normal { .. }
