@@ -3,10 +3,10 @@
 //! ([`crate::analysis::certified_hazard`]).
 
 use super::CriterionCheck;
-use crate::analysis::certified_hazard::PairedStrata;
-use crate::analysis::certify::CertifyOptions;
-use crate::analysis::hazard::return_level;
-use crate::analysis::strata::StratifiedPeaks;
+use crate::analysis::answers::hazard::return_level;
+use crate::analysis::certification::certified_hazard::PairedStrata;
+use crate::analysis::certification::certify::CertifyOptions;
+use crate::analysis::sampling::strata::StratifiedPeaks;
 use crate::study::Order;
 use serde::{Deserialize, Serialize};
 

@@ -13,15 +13,15 @@ pub use criteria::{
     StrengthTarget, built_in,
 };
 
-use super::annual_sample::{Aim, AnnualDesign, AnnualSample, PILOT_SHARE};
-use super::certified_hazard::PairedStrata;
-use super::certify::{CertifyOptions, check_reference_storms};
-use super::exceedance::check_confidence;
-use super::hazard::{MAX_SPEED, REFERENCE_PILOT_SHARE, WIND_SPEED, return_level};
-use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
-use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, peak_sets_at};
-use super::strata::{Estimate, StormRows, StratifiedPeaks, WindStrata, pilot};
-use super::{Response, ResponseKind};
+use crate::analysis::answers::hazard::{MAX_SPEED, REFERENCE_PILOT_SHARE, WIND_SPEED, return_level};
+use crate::analysis::certification::certified_hazard::PairedStrata;
+use crate::analysis::certification::certify::{CertifyOptions, check_reference_storms};
+use crate::analysis::responses::response::{Response, ResponseKind};
+use crate::analysis::sampling::annual_sample::{Aim, AnnualDesign, AnnualSample, PILOT_SHARE};
+use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, peak_sets_at};
+use crate::analysis::sampling::exceedance::check_confidence;
+use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
+use crate::analysis::sampling::strata::{Estimate, StormRows, StratifiedPeaks, WindStrata, pilot};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
@@ -466,7 +466,7 @@ impl Serviceability {
 mod tests {
     use super::*;
     use crate::analysis::annual_probability_of_period;
-    use crate::analysis::hazard::tests::{lognormal_scatter_annual, lognormal_scatter_level, toy_inputs};
+    use crate::analysis::answers::hazard::tests::{lognormal_scatter_annual, lognormal_scatter_level, toy_inputs};
 
     /// A response at floor f of f·scale·v·exp(σz): its T-year level is exactly f·scale times the
     /// lognormal scatter's ([`lognormal_scatter_level`], an independent quadrature).

@@ -4,8 +4,7 @@
 //! them off its floors' motion, with Newmark's own velocities (damper forces) and accelerations,
 //! which satisfy every floor's equation of motion at every step.
 
-use super::response::{damper_below, envelope};
-use super::{Response, ResponseView};
+use super::response::{Response, ResponseView, damper_below, envelope};
 use crate::dynamics::SampleModel;
 use crate::error::{Error, Result};
 use crate::study::{StormRun, Study};

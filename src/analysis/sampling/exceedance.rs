@@ -1,7 +1,8 @@
 //! Exceedance curves of peak responses: P(peak > x) over a threshold grid, with exact binomial
 //! (Clopper-Pearson) confidence bands, and the metamodel sampling that feeds them.
 
-use super::{Certification, Response};
+use crate::analysis::certification::certify::Certification;
+use crate::analysis::responses::response::Response;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{Beta, ContinuousCDF};
@@ -32,7 +33,7 @@ pub fn automatic_thresholds(peaks: &[f64], count: usize) -> Vec<f64> {
 
 /// Exact binomial (Clopper-Pearson) interval for k successes in n trials; k and n may be
 /// effective counts, not whole (a stratified estimate's, by Korn & Graubard).
-pub(super) fn clopper_pearson(k: f64, n: f64, confidence: f64) -> (f64, f64) {
+pub(in crate::analysis) fn clopper_pearson(k: f64, n: f64, confidence: f64) -> (f64, f64) {
     let alpha = 1.0 - confidence;
     let lower = if k <= 0.0 { 0.0 } else { Beta::new(k, n - k + 1.0).map_or(0.0, |b| b.inverse_cdf(alpha / 2.0)) };
     let upper = if k >= n { 1.0 } else { Beta::new(k + 1.0, n - k).map_or(1.0, |b| b.inverse_cdf(1.0 - alpha / 2.0)) };

@@ -5,9 +5,9 @@
 //! "Largest" is a floor, not an envelope: the floor (or damper) whose peak is largest on average
 //! over the reference samples, so that both models are compared on the same named response.
 
-use super::exceedance::max_exceedance_gap;
-use super::response::{Response, ResponseKind, ResponseView};
-use super::{pearson, quantile};
+use crate::analysis::responses::peaks::{pearson, quantile};
+use crate::analysis::responses::response::{Response, ResponseKind, ResponseView};
+use crate::analysis::sampling::exceedance::max_exceedance_gap;
 use crate::error::Result;
 use serde::{Deserialize, Serialize};
 

@@ -14,10 +14,12 @@
 //! pseudo-count in each discordant cell), the metamodel's part Agresti & Coull's, their variances
 //! summed. The unit tests measure the coverage.
 
-use super::Response;
-use super::exceedance::{ExceedanceCurve, clopper_pearson, exceedance_curve};
-use super::plot::exceedance_svg;
-use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_rows, reference_storm_seed};
+use crate::analysis::responses::response::Response;
+use crate::analysis::sampling::exceedance::{ExceedanceCurve, clopper_pearson, exceedance_curve};
+use crate::analysis::sampling::reference_storms::{
+    PairedPeak, PairedRuns, ReferenceRunner, reference_rows, reference_storm_seed,
+};
+use crate::analysis::writers::plot::exceedance_svg;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
@@ -329,7 +331,7 @@ mod tests {
             let metamodel: Vec<f64> = toy_storms(&mut rng, 10_000).iter().map(|p| p.metamodel).collect();
             let paired = toy_storms(&mut rng, 200);
             let curve = certified_curve(&metamodel, &paired, &thresholds, Order::Reduced, 0.95).curve;
-            let plain = super::super::exceedance::exceedance_curve(&metamodel, &thresholds, 0.95);
+            let plain = crate::analysis::sampling::exceedance::exceedance_curve(&metamodel, &thresholds, 0.95);
             for (i, &p) in levels.iter().enumerate() {
                 covered[i] += usize::from(curve.lower[i] <= p && p <= curve.upper[i]);
                 surrogate_covered[i] += usize::from(plain.lower[i] <= p && p <= plain.upper[i]);

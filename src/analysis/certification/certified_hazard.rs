@@ -26,8 +26,8 @@
 //! weighted by 1/P(x)², as the metamodel's storms are.
 
 use super::certify::{AdjustedDifference, Certification, CertifyOptions};
-use super::reference_storms::PairedPeak;
-use super::strata::{Estimate, StormRows, StratifiedPeaks, pilot};
+use crate::analysis::sampling::reference_storms::PairedPeak;
+use crate::analysis::sampling::strata::{Estimate, StormRows, StratifiedPeaks, pilot};
 use crate::error::Result;
 use crate::study::Order;
 use crate::uncertainty::rng_from_seed;
@@ -277,11 +277,11 @@ fn log_error(pair: &PairedPeak) -> Option<f64> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::certify::CertifyOptions;
-    use super::super::hazard::tests::lognormal_scatter_annual;
-    use super::super::hazard::{HazardOptions, WIND_SPEED, hazard_curve};
-    use super::super::strata::Sampling;
     use super::*;
+    use crate::analysis::answers::hazard::tests::lognormal_scatter_annual;
+    use crate::analysis::answers::hazard::{HazardOptions, WIND_SPEED, hazard_curve};
+    use crate::analysis::certification::certify::CertifyOptions;
+    use crate::analysis::sampling::strata::Sampling;
     use crate::error::Result;
     use crate::uncertainty::{Input, InputModel, Marginal};
 

@@ -4,7 +4,7 @@
 //! distinguishes the columns and not by sampling noise; and every column shares one allocation of
 //! storms to the strata, chosen from the pilot for all the columns' aims together.
 
-use super::sampling::{DivergedStorm, name_diverged};
+use super::draws::{DivergedStorm, name_diverged};
 use super::strata::{StormRows, StratifiedPeaks, WindStrata, pilot};
 use crate::error::Result;
 use crate::uncertainty::Rng;

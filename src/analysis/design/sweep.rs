@@ -4,12 +4,12 @@
 //! and one allocation of storms to the wind strata, chosen for all the values' levels together,
 //! so that the levels differ by what the input does, not by sampling noise ([`super::annual_sample`]).
 
-use super::Response;
-use super::annual_sample::{AnnualDesign, PILOT_SHARE};
-use super::exceedance::check_confidence;
-use super::hazard::{MAX_SPEED, WIND_SPEED, return_level};
-use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, peaks_at};
-use super::strata::{StormRows, StratifiedPeaks, WindStrata, pilot};
+use crate::analysis::answers::hazard::{MAX_SPEED, WIND_SPEED, return_level};
+use crate::analysis::responses::response::Response;
+use crate::analysis::sampling::annual_sample::{AnnualDesign, PILOT_SHARE};
+use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, peaks_at};
+use crate::analysis::sampling::exceedance::check_confidence;
+use crate::analysis::sampling::strata::{StormRows, StratifiedPeaks, WindStrata, pilot};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::Study;
@@ -207,7 +207,7 @@ impl Sweep {
 mod tests {
     use super::*;
     use crate::analysis::annual_probability_of_period;
-    use crate::analysis::hazard::tests::lognormal_scatter_level;
+    use crate::analysis::answers::hazard::tests::lognormal_scatter_level;
     use crate::uncertainty::Input;
 
     /// peak = v·exp(σz)/(1 + c) with c the swept input: the same storms at every value make the

@@ -2,10 +2,13 @@
 //! 4.3.2): the same inputs and the same storm through both, then errors, peak correlation (Fig. 6)
 //! and the exceedance curves of the peaks (Fig. 7).
 
-use super::exceedance::{ExceedanceCurve, automatic_thresholds, exceedance_curve, max_exceedance_gap};
-use super::response::ResponseView;
 use super::validated_responses::{CheckedPeaks, ResponseValidation, compare};
-use super::{Response, pearson, quantile};
+use crate::analysis::responses::peaks::{pearson, quantile};
+use crate::analysis::responses::response::Response;
+use crate::analysis::responses::response::ResponseView;
+use crate::analysis::sampling::exceedance::{
+    ExceedanceCurve, automatic_thresholds, exceedance_curve, max_exceedance_gap,
+};
 use crate::dynamics::{ModalMotion, SampleModel, integrate_reduced};
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, check};

@@ -11,9 +11,9 @@
 //! index by Jansen (1999), mean((f_A − f_{A_B^g})²)/2 divided by the variance of f over A and B.
 //! Intervals by bootstrapping the N rows (percentile, 500 resamples).
 
-use super::exceedance::check_confidence;
-use super::sampling::check_samples;
-use super::{Draws, OnDivergence, Response, peaks_at};
+use crate::analysis::responses::response::Response;
+use crate::analysis::sampling::draws::{Draws, OnDivergence, check_samples, peaks_at};
+use crate::analysis::sampling::exceedance::check_confidence;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::Study;

@@ -2,8 +2,8 @@
 //! model (or given rows of inputs and their storm streams), run by batches of [`LANES`] through
 //! the free run, reduced to the peaks of one or several responses.
 
-use super::Response;
-use super::motion_peaks::motion_sink;
+use crate::analysis::responses::motion_peaks::motion_sink;
+use crate::analysis::responses::response::Response;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress};
 use crate::simd::LANES;

@@ -2,19 +2,19 @@
 //! storm's phases random, and per threshold the lognormal fragility P = Φ(ln(v/θ)/β) that
 //! engineers tabulate, fitted by maximum likelihood on the binomial counts (Baker 2015).
 
-use super::certify::{
+use crate::analysis::certification::certify::{
     Certification, CertifiedCurve, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, check_reference_storms,
 };
-use super::exceedance::{check_confidence, clopper_pearson};
-use super::hazard::WIND_SPEED;
-use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
-use super::sampling::{DivergedStorm, check_samples, name_diverged};
-use super::{Draws, OnDivergence, Response, check_thresholds, peaks_at};
+use crate::analysis::responses::response::Response;
+use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, name_diverged, peaks_at};
+use crate::analysis::sampling::exceedance::check_thresholds;
+use crate::analysis::sampling::exceedance::{check_confidence, clopper_pearson};
+use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
 use crate::error::{Error, Result};
 use crate::optimise::nelder_mead;
 use crate::progress::Observer;
 use crate::progress::Silent;
-use crate::study::{Order, Study};
+use crate::study::{Order, Study, WIND_SPEED};
 use crate::surrogate::Metamodel;
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use crate::wind::WindLoads;

@@ -2,15 +2,16 @@
 //! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
 //! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
 
-use super::annual_sample::{AnnualDesign, AnnualSample};
-use super::certified_hazard::{CertifiedPoint, HazardCertification, PairedStrata};
-use super::certify::{CertifyOptions, check_reference_storms};
-use super::climate::{annual_probability_of_period, period_of_annual_probability};
-use super::exceedance::{automatic_thresholds, check_confidence};
-use super::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
-use super::sampling::{DivergedStorm, Draws, OnDivergence, check_samples, peaks_at};
-use super::strata::{Estimate, Sampling, StormRows, StratifiedPeaks, WindStrata, pilot};
-use super::{Response, check_thresholds};
+use crate::analysis::certification::certified_hazard::{CertifiedPoint, HazardCertification, PairedStrata};
+use crate::analysis::certification::certify::{CertifyOptions, check_reference_storms};
+use crate::analysis::responses::response::Response;
+use crate::analysis::sampling::annual_sample::{AnnualDesign, AnnualSample};
+use crate::analysis::sampling::climate::{annual_probability_of_period, period_of_annual_probability};
+use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, peaks_at};
+use crate::analysis::sampling::exceedance::check_thresholds;
+use crate::analysis::sampling::exceedance::{automatic_thresholds, check_confidence};
+use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
+use crate::analysis::sampling::strata::{Estimate, Sampling, StormRows, StratifiedPeaks, WindStrata, pilot};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
@@ -35,10 +36,10 @@ pub const MAX_RETURN_PERIOD: f64 = 1e6;
 
 /// One in this many of a certified analysis's reference storms go to their pilot: more than the
 /// metamodel's, for the pilot also measures how far the two models disagree.
-pub(super) const REFERENCE_PILOT_SHARE: usize = 2;
+pub(in crate::analysis) const REFERENCE_PILOT_SHARE: usize = 2;
 
 /// The largest station speed the wind model admits (m/s).
-pub(super) const MAX_SPEED: f64 = 150.0;
+pub(in crate::analysis) const MAX_SPEED: f64 = 150.0;
 
 /// What an annual analysis is asked.
 #[derive(Debug, Clone, PartialEq)]
@@ -301,7 +302,11 @@ fn targets(sample: &StratifiedPeaks, options: &HazardOptions) -> Vec<f64> {
 /// the first crossing is the cautious one; so the levels are scanned on a grid of at most
 /// [`RETURN_LEVEL_GRID`] first, then bisected within the grid step where the first crossing lies
 /// (a dip narrower than a grid step may be missed).
-pub(super) fn return_level(levels: &[f64], period: f64, estimate: impl Fn(f64) -> Estimate) -> ReturnLevel {
+pub(in crate::analysis) fn return_level(
+    levels: &[f64],
+    period: f64,
+    estimate: impl Fn(f64) -> Estimate,
+) -> ReturnLevel {
     let target = annual_probability_of_period(period);
     let crossing = |end: fn(&Estimate) -> f64| {
         let above = |x: f64| end(&estimate(x)) > target;
@@ -363,9 +368,9 @@ pub fn metamodel_hazard(
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+pub(in crate::analysis) mod tests {
     use super::*;
-    use crate::analysis::sampling::NAMED_DIVERGED_STORMS;
+    use crate::analysis::sampling::draws::NAMED_DIVERGED_STORMS;
     use crate::uncertainty::Input;
     use statrs::distribution::Continuous;
 

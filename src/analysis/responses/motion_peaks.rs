@@ -25,8 +25,7 @@ mod gates;
 mod lane_models;
 mod rms;
 
-use super::Response;
-use super::response::{damper_below, rms_stride};
+use super::response::{Response, damper_below, rms_stride};
 use crate::dynamics::power;
 use crate::error::{Error, Result};
 use crate::simd::{Kernel, LANES, Lanes, Vector, run_widest};

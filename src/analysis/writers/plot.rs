@@ -1,7 +1,12 @@
 //! SVG figures: exceedance curves with their bands (the paper's Fig. 7), the scatter of peaks,
 //! reference against metamodel (Fig. 6), annual curves with return levels, and fragility curves.
 
-use super::{ExceedanceCurve, Fragility, HazardCurve, PeakProfile, Serviceability, Sweep};
+use crate::analysis::answers::fragility::Fragility;
+use crate::analysis::answers::hazard::HazardCurve;
+use crate::analysis::answers::profile::PeakProfile;
+use crate::analysis::design::serviceability::Serviceability;
+use crate::analysis::design::sweep::{Sweep, SweepPoint};
+use crate::analysis::sampling::exceedance::ExceedanceCurve;
 use plotters::prelude::*;
 use statrs::distribution::{ContinuousCDF, Normal};
 
@@ -134,7 +139,7 @@ pub fn serviceability_svg(check: &Serviceability) -> String {
 /// A sweep: the T-year level against the swept input's value, with its band, and a limit when
 /// one is given.
 pub fn sweep_svg(sweep: &Sweep, y_label: &str, limit: Option<f64>) -> String {
-    let at = |pick: fn(&super::SweepPoint) -> Option<f64>| -> Vec<(f64, f64)> {
+    let at = |pick: fn(&SweepPoint) -> Option<f64>| -> Vec<(f64, f64)> {
         sweep.results.iter().filter_map(|p| Some((p.input_value, pick(p)?))).collect()
     };
     let (values, lower, upper) = (at(|p| p.level), at(|p| p.lower), at(|p| p.upper));

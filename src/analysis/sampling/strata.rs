@@ -198,7 +198,7 @@ impl StratifiedPeaks {
     }
 
     /// The point estimate of P(peak > x), without its band.
-    pub(super) fn exceedance_fraction(&self, x: f64) -> f64 {
+    pub(in crate::analysis) fn exceedance_fraction(&self, x: f64) -> f64 {
         let sampled = self.weights.iter().zip(&self.strata).map(|(w, stratum)| {
             w * (stratum.len() - stratum.partition_point(|s| s.0 <= x)) as f64 / stratum.len() as f64
         });
@@ -213,18 +213,18 @@ impl StratifiedPeaks {
     }
 
     /// The climate's probability of each stratum.
-    pub(super) fn weights(&self) -> &[f64] {
+    pub(in crate::analysis) fn weights(&self) -> &[f64] {
         &self.weights
     }
 
     /// The probability of storms too rare to be run, counted as exceeding.
-    pub(super) fn unsampled(&self) -> f64 {
+    pub(in crate::analysis) fn unsampled(&self) -> f64 {
         self.unsampled
     }
 
     /// Stratum `s`'s finite peaks within [lo, hi], ascending, its diverged storms (whose peaks
     /// are infinite) and its number of storms.
-    pub(super) fn window(&self, s: usize, lo: f64, hi: f64) -> (&[(f64, bool)], usize, usize) {
+    pub(in crate::analysis) fn window(&self, s: usize, lo: f64, hi: f64) -> (&[(f64, bool)], usize, usize) {
         let stratum = &self.strata[s];
         let finite = stratum.partition_point(|p| p.0.is_finite());
         let first = stratum.partition_point(|p| p.0 < lo).min(finite);
@@ -249,7 +249,7 @@ impl StratifiedPeaks {
     /// The sampled strata's part of P(peak > x). Its band is Wilson's at the effective sample size
     /// n* = p̂(1 − p̂)/Var p̂ (Kish's design effect; the fraction's own when no storm exceeds), and
     /// Clopper-Pearson's for one stratum.
-    pub(super) fn sampled(&self, x: f64, confidence: f64) -> SampledPart {
+    pub(in crate::analysis) fn sampled(&self, x: f64, confidence: f64) -> SampledPart {
         let sampled: f64 = self.weights.iter().sum();
         let (mut p, mut variance, mut beyond, mut kish) = (0.0, 0.0, 0.0, 0.0);
         for (w, stratum) in self.weights.iter().zip(&self.strata) {
@@ -277,7 +277,7 @@ impl StratifiedPeaks {
 }
 
 /// The sampled strata's part of an exceedance probability.
-pub(super) struct SampledPart {
+pub(in crate::analysis) struct SampledPart {
     pub probability: f64,
     /// The variance of `probability`.
     pub variance: f64,

@@ -2,8 +2,8 @@
 //! and the peak inter-storey drift ratio of every storey, as pelicun (the FEMA P-58 engine behind
 //! the NHERI SimCenter tools) reads a demand sample.
 
-use super::sampling::{Draws, OnDivergence, check_samples, peak_sets_at};
-use super::{Response, STANDARD_GRAVITY};
+use crate::analysis::responses::response::{Response, STANDARD_GRAVITY};
+use crate::analysis::sampling::draws::{Draws, OnDivergence, check_samples, peak_sets_at};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Study, WIND_SPEED};

@@ -2,10 +2,10 @@
 //! in one pass over the storms (every floor's peak from the same runs), and the profile of a
 //! quantile of those peaks with a distribution-free confidence band.
 
-use super::exceedance::check_confidence;
-use super::peaks::quantile;
-use super::sampling::{Draws, OnDivergence, check_samples, peak_sets_at};
-use super::{Response, ResponseKind};
+use crate::analysis::responses::peaks::quantile;
+use crate::analysis::responses::response::{Response, ResponseKind};
+use crate::analysis::sampling::draws::{Draws, OnDivergence, check_samples, peak_sets_at};
+use crate::analysis::sampling::exceedance::check_confidence;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::Study;
