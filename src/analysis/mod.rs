@@ -41,7 +41,7 @@ pub use answers::sobol::{STORM_GROUP, Sensitivity, SobolIndex, metamodel_sensiti
 pub use certification::certified_hazard::HazardCertification;
 pub use certification::certify::{
     Certification, CertifiedCurve, CertifyOptions, MAX_REFERENCE_STORMS, certified_curve, certify_exceedance,
-    check_reference_storms, exceedance_figure,
+    check_reference_storms,
 };
 pub use design::serviceability::{
     BUILT_IN, Criterion, CriterionCheck, CriterionChoice, FailureMode, LevelProfile, RiskCategory, Serviceability,
@@ -59,7 +59,7 @@ pub use sampling::draws::{
 };
 pub use sampling::exceedance::{
     ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,
-    exceedance_csv, exceedance_curve, max_exceedance_gap,
+    exceedance_curve, max_exceedance_gap,
 };
 pub use sampling::reference_storms::{
     OnThisMachine, PairedPeak, PairedRuns, ReferenceRunner, paired_peaks, paired_peaks_at, reference_storm_seed,
@@ -67,6 +67,8 @@ pub use sampling::reference_storms::{
 pub use sampling::strata::Sampling;
 pub use validation::validate::{ValidationReport, validate};
 pub use validation::validated_responses::ResponseValidation;
+pub use writers::csv::exceedance_csv;
 pub use writers::plot::{
-    exceedance_svg, fragility_svg, hazard_svg, profile_svg, serviceability_svg, sweep_svg, validation_svg,
+    exceedance_figure, exceedance_svg, fragility_svg, hazard_svg, profile_svg, serviceability_svg, sweep_svg,
+    validation_svg,
 };

@@ -9,7 +9,6 @@ use crate::progress::Observer;
 use crate::study::{Study, WIND_SPEED};
 use crate::surrogate::Metamodel;
 use crate::uncertainty::{monte_carlo, rng_from_seed};
-use std::fmt::Write;
 
 /// The peak demands of storms at one wind speed, every other input drawn from its law.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,46 +57,4 @@ pub fn metamodel_demands(
     let drift_ratios =
         peaks.iter().map(|storm| storm[floors..].iter().zip(&heights).map(|(d, h)| d / h).collect()).collect();
     Ok(Demands { wind_speed, floor_accelerations, drift_ratios })
-}
-
-impl Demands {
-    /// pelicun's demand sample: a header of `event-type-location-direction` names (`1-PFA-j-1`,
-    /// `1-PID-j-1`), a `Units` row, then one row per storm under its index.
-    pub fn pelicun_csv(&self) -> String {
-        let floors = self.drift_ratios.first().map_or(0, Vec::len);
-        let mut csv = String::new();
-        let pfa = (0..=floors).map(|j| format!(",1-PFA-{j}-1"));
-        let pid = (1..=floors).map(|j| format!(",1-PID-{j}-1"));
-        csv.extend(pfa.chain(pid));
-        csv.push_str("\nUnits");
-        csv.push_str(&",g".repeat(floors + 1));
-        csv.push_str(&",rad".repeat(floors));
-        csv.push('\n');
-        for (storm, (accelerations, ratios)) in self.floor_accelerations.iter().zip(&self.drift_ratios).enumerate() {
-            write!(csv, "{storm}").expect("writing to a string");
-            for value in accelerations.iter().chain(ratios) {
-                write!(csv, ",{value:e}").expect("writing to a string");
-            }
-            csv.push('\n');
-        }
-        csv
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::Demands;
-
-    /// Two storms of a two-storey building, by hand.
-    #[test]
-    fn the_csv_is_pelicuns_demand_sample() {
-        let demands = Demands {
-            wind_speed: 40.0,
-            floor_accelerations: vec![vec![0.0, 0.01, 0.02], vec![0.0, 0.03, 0.04]],
-            drift_ratios: vec![vec![0.001, 0.002], vec![0.003, 0.004]],
-        };
-        let expected = ",1-PFA-0-1,1-PFA-1-1,1-PFA-2-1,1-PID-1-1,1-PID-2-1\nUnits,g,g,g,rad,rad\n\
-                        0,0e0,1e-2,2e-2,1e-3,2e-3\n1,0e0,3e-2,4e-2,3e-3,4e-3\n";
-        assert_eq!(demands.pelicun_csv(), expected);
-    }
 }

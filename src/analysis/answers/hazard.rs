@@ -1,6 +1,6 @@
 //! Annual exceedance probabilities, return levels and reliability indices of a peak response under
 //! a wind climate: λ(x) = ∫ P(peak > x | v) f(v) dv with the structural inputs and the storm's
-//! phases still random, estimated by stratifying the climate's speed ([`super::strata`]).
+//! phases still random, estimated by stratifying the climate's speed ([`crate::analysis::sampling::strata`]).
 
 use crate::analysis::certification::certified_hazard::{CertifiedPoint, HazardCertification, PairedStrata};
 use crate::analysis::certification::certify::{CertifyOptions, check_reference_storms};
@@ -56,7 +56,7 @@ pub struct HazardOptions {
     pub confidence: f64,
     pub sampling: Sampling,
     /// Certify the curve with this many storms through both the reference model and the
-    /// metamodel, spread over the wind strata ([`super::certified_hazard`]).
+    /// metamodel, spread over the wind strata ([`crate::analysis::certification::certified_hazard`]).
     pub certify: Option<CertifyOptions>,
 }
 
@@ -175,50 +175,12 @@ pub struct HazardCurve {
     pub certification: Option<HazardCertification>,
 }
 
-impl HazardCurve {
-    /// The curve as CSV, one row per threshold (empty where a value is undefined); the threshold
-    /// column named with the response's unit (`threshold_m`, `threshold_m_s2`, `threshold_n`). A
-    /// certified curve adds what its reference storms did.
-    pub fn csv(&self, unit_tag: &str) -> String {
-        let mut out =
-            format!("threshold_{unit_tag},annual_probability,lower,upper,cov,mri_years,beyond_calibrated_range");
-        if self.certification.is_some() {
-            out +=
-                ",metamodel_probability,mismatch_rate,correction,correction_lower,correction_upper,uncorrected_bound";
-        }
-        out += "\n";
-        let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
-        for i in 0..self.thresholds.len() {
-            out += &format!(
-                "{},{},{},{},{},{},{}",
-                self.thresholds[i],
-                self.annual_probability[i],
-                self.lower[i],
-                self.upper[i],
-                blank(self.cov[i]),
-                blank(self.mri_years[i]),
-                self.probability_beyond_calibrated_range[i]
-            );
-            if let Some(c) = &self.certification {
-                let p = &c.points;
-                let row = [p.metamodel_probabilities[i], p.mismatch_rate[i], p.correction[i], p.correction_lower[i]];
-                out += &format!(
-                    ",{},{},{},{},{},{}",
-                    row[0], row[1], row[2], row[3], p.correction_upper[i], c.uncorrected_bound[i]
-                );
-            }
-            out += "\n";
-        }
-        out
-    }
-}
-
 /// The annual curve of the peaks that `peaks_of(rows, first)` returns for input rows drawn from
 /// `inputs` with the wind speed replaced by the climate's (`first`: the number of rows run before,
 /// so that every row gets its own storm). Stratified, a quarter of the storms go equally to the
 /// strata and the rest by Neyman's allocation for the return periods asked for. Certified, the
 /// storms through both models that `pairs_of(rows, first)` returns, for rows drawn alike from the
-/// reference storms' seed, correct it stratum by stratum ([`super::certified_hazard`]).
+/// reference storms' seed, correct it stratum by stratum ([`crate::analysis::certification::certified_hazard`]).
 pub fn hazard_curve(
     inputs: &InputModel,
     options: &HazardOptions,
@@ -368,217 +330,4 @@ pub fn metamodel_hazard(
 }
 
 #[cfg(test)]
-pub(in crate::analysis) mod tests {
-    use super::*;
-    use crate::analysis::sampling::draws::NAMED_DIVERGED_STORMS;
-    use crate::uncertainty::Input;
-    use statrs::distribution::Continuous;
-
-    /// peak = v·exp(σ z), z ~ N(0, 1): λ(x) = ∫ Φ(ln(v/x)/σ) f(v) dv, here by Simpson's rule on the
-    /// climate's quantiles (an independent computation).
-    pub(in crate::analysis) fn lognormal_scatter_annual(climate: &Marginal, sigma: f64, x: f64) -> f64 {
-        // Over ξ = Φ⁻¹(F(v)) from −8 to 8, where φ(ξ) dξ = f(v) dv.
-        let normal = Normal::standard();
-        let integrand = |xi: f64| normal.pdf(xi) * normal.cdf((climate.from_standard(xi) / x).ln() / sigma);
-        crate::uncertainty::simpson(integrand, -8.0, 8.0, 4000)
-    }
-
-    /// The exact level of annual probability `p` of [`lognormal_scatter_annual`], by bisection.
-    pub(in crate::analysis) fn lognormal_scatter_level(climate: &Marginal, sigma: f64, p: f64) -> f64 {
-        let (mut lo, mut hi) = (1.0, 200.0);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if lognormal_scatter_annual(climate, sigma, mid) > p { lo = mid } else { hi = mid }
-        }
-        0.5 * (lo + hi)
-    }
-
-    pub(in crate::analysis) fn toy_inputs() -> InputModel {
-        InputModel::new(vec![
-            Input { name: "z".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },
-            Input { name: WIND_SPEED.into(), marginal: Marginal::Frechet { mean: 30.0, sd: 3.5 } },
-        ])
-        .unwrap()
-    }
-
-    fn not_paired(_: &[Vec<f64>], _: usize) -> Result<Vec<PairedPeak>> {
-        unreachable!("not certified")
-    }
-
-    fn toy_peaks(sigma: f64) -> impl FnMut(&[Vec<f64>], usize) -> Result<Vec<f64>> {
-        move |rows: &[Vec<f64>], _| Ok(rows.iter().map(|r| r[1] * (sigma * r[0]).exp()).collect())
-    }
-
-    /// The stratified annual curve of a response with lognormal scatter about the speed, against
-    /// the quadrature: within four coefficients of variation from 10⁻¹ to 10⁻⁵ a year, each with a
-    /// coefficient of variation below 0.3 from 20 000 storms (equal allocation gave 0.44 at 10⁻⁵,
-    /// Neyman's after a pilot below 0.3); the return levels' bands hold the exact levels.
-    #[test]
-    fn annual_curve_and_return_levels_match_quadrature_down_to_1e_5() {
-        let climate = Marginal::Gumbel { location: 22.0, scale: 2.2 };
-        let sigma = 0.15;
-        let mut options = HazardOptions {
-            climate,
-            samples: 20_000,
-            seed: 11,
-            thresholds: None,
-            return_periods: vec![10.0, 100.0, 1e4, 1e5],
-            limit: None,
-            confidence: 0.95,
-            sampling: Sampling::Stratified,
-            certify: None,
-        };
-        // The exact level of each probability, by bisection on the quadrature.
-        let level = |p: f64| lognormal_scatter_level(&climate, sigma, p);
-        let levels: Vec<f64> = [1e-1, 1e-2, 1e-3, 1e-4, 1e-5].iter().map(|&p| level(p)).collect();
-        options.thresholds = Some(levels.clone());
-        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma), not_paired).unwrap();
-        for (i, p) in [1e-1, 1e-2, 1e-3, 1e-4, 1e-5].iter().enumerate() {
-            let cov = curve.cov[i].unwrap();
-            assert!(cov < 0.3, "p = {p}: cov {cov}");
-            let relative = curve.annual_probability[i] / p - 1.0;
-            assert!(relative.abs() < 4.0 * cov, "p = {p}: {} (cov {cov})", curve.annual_probability[i]);
-        }
-        for r in &curve.return_levels {
-            let exact = level(1.0 - (-1.0 / r.return_period_years).exp());
-            let (lo, hi) = (r.lower.unwrap(), r.upper.unwrap());
-            assert!(
-                lo <= exact * 1.01 && exact <= hi * 1.01,
-                "T = {}: {exact} not in [{lo}, {hi}]",
-                r.return_period_years
-            );
-        }
-        // The rarest level leans on speeds above 45 m/s (the 10⁻⁵ speed is 47.3 m/s); the commonest
-        // does not.
-        let beyond = &curve.probability_beyond_calibrated_range;
-        assert!(beyond[4] > 0.1 * curve.annual_probability[4], "{beyond:?}");
-        assert!(beyond[0] < 0.01 * curve.annual_probability[0], "{beyond:?}");
-        assert!(curve.samples <= 20_000);
-        // The commonest levels: the 1-year one is exceeded with 1 − e⁻¹ = 0.632 a year, the 5-year
-        // one with 0.181 (not 1 and 0.2).
-        options.thresholds = None;
-        options.return_periods = vec![1.0, 5.0];
-        let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], toy_peaks(sigma), not_paired).unwrap();
-        for r in &curve.return_levels {
-            let exact = level(1.0 - (-1.0 / r.return_period_years).exp());
-            let (lo, hi) = (r.lower.unwrap(), r.upper.unwrap());
-            assert!(lo <= exact && exact <= hi, "T = {}: {exact} not in [{lo}, {hi}]", r.return_period_years);
-        }
-    }
-
-    /// Plain Monte Carlo with the same number of storms agrees with the stratified estimate where
-    /// it can see (10⁻¹, 10⁻²), within the sum of their standard errors times four.
-    #[test]
-    fn plain_monte_carlo_agrees_with_the_stratified_estimate() {
-        let climate = Marginal::Frechet { mean: 30.0, sd: 3.5 };
-        let thresholds = vec![35.0, 45.0];
-        let run = |sampling| {
-            let options = HazardOptions {
-                climate,
-                samples: 40_000,
-                seed: 5,
-                thresholds: Some(thresholds.clone()),
-                return_periods: vec![],
-                limit: Some(45.0),
-                confidence: 0.95,
-                sampling,
-                certify: None,
-            };
-            hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1), not_paired).unwrap()
-        };
-        let (stratified, plain) = (run(Sampling::Stratified), run(Sampling::MonteCarlo));
-        for i in 0..2 {
-            let sd = |c: &HazardCurve| c.cov[i].unwrap() * c.annual_probability[i];
-            let gap = (stratified.annual_probability[i] - plain.annual_probability[i]).abs();
-            assert!(gap < 4.0 * (sd(&stratified) + sd(&plain)), "{i}: {stratified:?} {plain:?}");
-        }
-        let r = plain.reliability.unwrap();
-        let beta = r.beta.unwrap();
-        assert!((beta + Normal::standard().inverse_cdf(r.annual_probability)).abs() < 1e-12);
-        assert!(r.beta_lower.unwrap() < beta && beta < r.beta_upper.unwrap());
-    }
-
-    /// Storms that diverge (here, in a toy, every storm above 40 m/s) are counted and the first
-    /// five named with the inputs they were run with, in the order they ran.
-    #[test]
-    fn diverged_storms_are_counted_and_the_first_named_with_their_inputs() {
-        let options = HazardOptions {
-            climate: Marginal::Frechet { mean: 30.0, sd: 3.5 },
-            samples: 2_000,
-            seed: 3,
-            thresholds: None,
-            return_periods: vec![10.0],
-            limit: None,
-            confidence: 0.95,
-            sampling: Sampling::MonteCarlo,
-            certify: None,
-        };
-        let mut ran = Vec::new();
-        let peaks_of = |rows: &[Vec<f64>], first: usize| {
-            ran.extend(rows.iter().enumerate().map(|(i, r)| (first + i, r.clone())));
-            Ok(rows.iter().map(|r| if r[1] > 40.0 { f64::INFINITY } else { r[1] }).collect())
-        };
-        let curve = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], peaks_of, not_paired).unwrap();
-        let diverged: Vec<_> = ran.iter().filter(|(_, r)| r[1] > 40.0).collect();
-        assert!(diverged.len() > NAMED_DIVERGED_STORMS, "{} diverged", diverged.len());
-        assert_eq!(curve.diverged_storms, diverged.len());
-        let named: Vec<_> =
-            curve.first_diverged.iter().map(|d| (d.storm, vec![d.inputs["z"], d.inputs[WIND_SPEED]])).collect();
-        let expected: Vec<_> = diverged.iter().take(NAMED_DIVERGED_STORMS).map(|(k, r)| (*k, r.clone())).collect();
-        assert_eq!(named, expected);
-        let line = crate::analysis::describe_diverged(&curve.first_diverged);
-        assert!(line.starts_with(&format!("storm {} (wind_speed = ", expected[0].0)), "{line}");
-    }
-
-    /// A band whose lower end dips to zero over a hundred levels well before it falls for good
-    /// (wider than a grid step of 20): the return level's lower end is the first level where it
-    /// falls (the cautious reading), not where bisection alone might land; the monotone estimate's
-    /// own level is found to the level.
-    #[test]
-    fn a_return_levels_ends_are_the_first_crossings_of_a_band_that_is_not_monotone() {
-        let levels: Vec<f64> = (0..10_000).map(f64::from).collect();
-        let estimate = |x: f64| {
-            let probability = (-x / 1_000.0).exp();
-            let dipped = (3_001.0..3_101.0).contains(&x);
-            Estimate {
-                probability,
-                lower: if dipped { 0.0 } else { 0.5 * probability },
-                upper: probability,
-                cov: None,
-                beyond: 0.0,
-            }
-        };
-        // 1 − exp(−1/T) = exp(−5) at T = 1 / −ln(1 − e⁻⁵).
-        let period = -1.0 / (1.0 - (-5.0f64).exp()).ln();
-        let level = return_level(&levels, period, estimate);
-        assert_eq!(level.value, Some(5_000.0));
-        assert_eq!(level.upper, Some(5_000.0));
-        assert_eq!(level.lower, Some(3_001.0), "the first level where the lower end falls");
-    }
-
-    #[test]
-    fn bad_options_name_the_field() {
-        let base = HazardOptions {
-            climate: Marginal::Frechet { mean: 30.0, sd: 3.5 },
-            samples: 100,
-            seed: 1,
-            thresholds: None,
-            return_periods: vec![50.0],
-            limit: None,
-            confidence: 0.95,
-            sampling: Sampling::Stratified,
-            certify: None,
-        };
-        let cases = [
-            ("return_periods", HazardOptions { return_periods: vec![0.5], ..base.clone() }),
-            ("return_periods", HazardOptions { return_periods: vec![f64::NAN], ..base.clone() }),
-            ("limit", HazardOptions { limit: Some(-1.0), ..base.clone() }),
-            ("samples", HazardOptions { samples: 5, ..base.clone() }),
-            ("confidence", HazardOptions { confidence: 1.0, ..base.clone() }),
-        ];
-        for (field, options) in cases {
-            let err = hazard_curve(&toy_inputs(), &options, [20.0, 50.0], toy_peaks(0.1), not_paired).unwrap_err();
-            assert!(err.to_string().starts_with(field), "{field}: {err}");
-        }
-    }
-}
+pub(in crate::analysis) mod tests;

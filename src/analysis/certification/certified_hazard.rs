@@ -1,4 +1,4 @@
-//! Certified annual curves: the stratified metamodel estimate ([`super::strata`]) corrected
+//! Certified annual curves: the stratified metamodel estimate ([`crate::analysis::sampling::strata`]) corrected
 //! stratum by stratum by storms run through both the reference model and the metamodel, and the
 //! corrections combined by total probability:
 //!
@@ -272,101 +272,5 @@ fn log_error(pair: &PairedPeak) -> Option<f64> {
         Some((pair.reference / pair.metamodel).ln())
     } else {
         (pair.reference == pair.metamodel).then_some(0.0)
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::analysis::answers::hazard::tests::lognormal_scatter_annual;
-    use crate::analysis::answers::hazard::{HazardOptions, WIND_SPEED, hazard_curve};
-    use crate::analysis::certification::certify::CertifyOptions;
-    use crate::analysis::sampling::strata::Sampling;
-    use crate::error::Result;
-    use crate::uncertainty::{Input, InputModel, Marginal};
-
-    const SIGMA: f64 = 0.15;
-
-    /// The reference's peak v·exp(0.15 z) and a surrogate 4 % low with 3 % scatter of its own,
-    /// 0.96·v·exp(0.15 z + 0.03 e): its annual curve is biased.
-    fn toy_inputs() -> InputModel {
-        let normal = Marginal::Normal { mean: 0.0, sd: 1.0 };
-        InputModel::new(vec![
-            Input { name: "z".into(), marginal: normal },
-            Input { name: "e".into(), marginal: normal },
-            Input { name: WIND_SPEED.into(), marginal: Marginal::Gumbel { location: 22.0, scale: 2.2 } },
-        ])
-        .unwrap()
-    }
-
-    fn reference(row: &[f64]) -> f64 {
-        row[2] * (SIGMA * row[0]).exp()
-    }
-
-    fn surrogate(row: &[f64]) -> f64 {
-        0.96 * reference(row) * (0.03 * row[1]).exp()
-    }
-
-    fn surrogate_peaks(rows: &[Vec<f64>], _: usize) -> Result<Vec<f64>> {
-        Ok(rows.iter().map(|r| surrogate(r)).collect())
-    }
-
-    fn pairs(rows: &[Vec<f64>], _: usize) -> Result<Vec<PairedPeak>> {
-        Ok(rows.iter().map(|r| PairedPeak { reference: reference(r), metamodel: surrogate(r) }).collect())
-    }
-
-    /// The level the reference exceeds with annual probability p, by bisection on the quadrature.
-    fn reference_level(climate: &Marginal, p: f64) -> f64 {
-        let (mut lo, mut hi) = (1.0, 200.0);
-        for _ in 0..60 {
-            let mid = 0.5 * (lo + hi);
-            if lognormal_scatter_annual(climate, SIGMA, mid) > p { lo = mid } else { hi = mid }
-        }
-        0.5 * (lo + hi)
-    }
-
-    /// The certified annual curve's 95 % band holds the reference's annual probability in at
-    /// least 93 % of 400 repetitions, from 0.5 down to 10⁻³ a year (4 000 surrogate storms, 200
-    /// reference storms over the strata), where the surrogate alone misses at 0.5 and 0.1.
-    /// Measured: 0.99, 1, 1, 1 at 0.5, 0.1, 10⁻², 10⁻³ (the surrogate's own band 0, 0, 0.12,
-    /// 0.55); the bands' mean width 0.33, 1.0, 2.3 and 3.4 times the probability (this surrogate
-    /// disagrees with the reference about 12 % of the storms at the median level).
-    #[test]
-    fn the_certified_annual_band_covers_the_reference_whatever_the_surrogates_bias() {
-        let climate = Marginal::Gumbel { location: 22.0, scale: 2.2 };
-        let levels = [0.5, 0.1, 1e-2, 1e-3];
-        let thresholds: Vec<f64> = levels.iter().map(|&p| reference_level(&climate, p)).collect();
-        let repetitions = 400;
-        let (mut covered, mut surrogate_covered) = ([0usize; 4], [0usize; 4]);
-        for seed in 0..repetitions {
-            let options = HazardOptions {
-                climate,
-                samples: 4_000,
-                seed,
-                thresholds: Some(thresholds.clone()),
-                return_periods: vec![2.0, 10.0, 100.0, 1000.0],
-                limit: None,
-                confidence: 0.95,
-                sampling: Sampling::Stratified,
-                certify: Some(CertifyOptions { reference_storms: 200, order: Order::Reduced }),
-            };
-            let curve = hazard_curve(&toy_inputs(), &options, [15.0, 45.0], surrogate_peaks, pairs).unwrap();
-            let certification = curve.certification.as_ref().unwrap();
-            assert_eq!(
-                certification.points.reference_storms,
-                certification.reference_storms_per_stratum.iter().sum::<usize>()
-            );
-            assert!(certification.points.reference_storms <= 200);
-            for (i, &p) in levels.iter().enumerate() {
-                covered[i] += usize::from(curve.lower[i] <= p && p <= curve.upper[i]);
-                let (lo, hi) = (certification.points.metamodel_lower[i], certification.points.metamodel_upper[i]);
-                surrogate_covered[i] += usize::from(lo <= p && p <= hi);
-            }
-        }
-        for (i, &p) in levels.iter().enumerate() {
-            let coverage = covered[i] as f64 / repetitions as f64;
-            assert!(coverage >= 0.93, "p = {p}: coverage {coverage}");
-        }
-        assert!(surrogate_covered[0] < repetitions as usize / 10 && surrogate_covered[1] < repetitions as usize / 10);
     }
 }

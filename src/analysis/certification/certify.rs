@@ -19,7 +19,6 @@ use crate::analysis::sampling::exceedance::{ExceedanceCurve, clopper_pearson, ex
 use crate::analysis::sampling::reference_storms::{
     PairedPeak, PairedRuns, ReferenceRunner, reference_rows, reference_storm_seed,
 };
-use crate::analysis::writers::plot::exceedance_svg;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
@@ -248,19 +247,6 @@ fn median(mut values: Vec<f64>) -> Option<f64> {
     values.sort_by(f64::total_cmp);
     let n = values.len();
     (n > 0).then(|| if n % 2 == 1 { values[n / 2] } else { (values[n / 2 - 1] + values[n / 2]) / 2.0 })
-}
-
-/// The figure of an exceedance curve labelled `label`; a certified one beside the metamodel's own
-/// curve with its band, as an uncertified answer would have drawn it.
-pub fn exceedance_figure(curve: &ExceedanceCurve, certification: Option<&Certification>, label: &str) -> String {
-    let Some(c) = certification else { return exceedance_svg(&[("PC-NARX", curve)], label) };
-    let metamodel = ExceedanceCurve {
-        probabilities: c.metamodel_probabilities.clone(),
-        lower: c.metamodel_lower.clone(),
-        upper: c.metamodel_upper.clone(),
-        ..curve.clone()
-    };
-    exceedance_svg(&[("PC-NARX", &metamodel), ("certified", curve)], label)
 }
 
 /// A proportion's adjusted centre and the variance of its estimate.

@@ -2,7 +2,7 @@
 //! climate, each the T-year level of a response over a range of floors against a limit, with its
 //! band, its governing floor and a verdict; a strength criterion's annual probability of exceeding
 //! its limit against ASCE 7's target. Every floor and criterion is read off the same storms
-//! ([`super::annual_sample`]), stratified over the climate as an annual curve is.
+//! ([`crate::analysis::sampling::annual_sample`]), stratified over the climate as an annual curve is.
 
 mod certified;
 mod criteria;
@@ -40,7 +40,7 @@ pub struct ServiceabilityOptions {
     pub seed: u64,
     pub confidence: f64,
     /// Certify each criterion's governing floor with this many storms through both the reference
-    /// model and the metamodel, shared out over the wind strata ([`super::certified_hazard`]).
+    /// model and the metamodel, shared out over the wind strata ([`crate::analysis::certification::certified_hazard`]).
     pub certify: Option<CertifyOptions>,
 }
 
@@ -425,40 +425,6 @@ fn strength_check(target: StrengthTarget, floor: usize, e: Estimate) -> Strength
         target_annual_probability: target.annual_probability(),
         target_beta,
         margin: beta.map(|b| b - target_beta),
-    }
-}
-
-impl Serviceability {
-    /// One row per criterion and floor: its T-year level with the band, the limit and the
-    /// utilisation, the governing floor marked, the criterion's verdict on every row.
-    pub fn csv(&self) -> String {
-        let mut out = String::from(
-            "criterion,response,statistic,unit,return_period_years,floor,value,lower,upper,limit,utilisation,governing,verdict\n",
-        );
-        let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
-        for c in &self.criteria {
-            let p = &c.profile;
-            for i in 0..p.floors.len() {
-                let row = [
-                    c.name.replace(',', ";"),
-                    c.response.name().to_string(),
-                    format!("{:?}", c.statistic).to_lowercase(),
-                    c.unit.clone(),
-                    c.return_period_years.to_string(),
-                    p.floors[i].to_string(),
-                    blank(p.values[i]),
-                    blank(p.lower[i]),
-                    blank(p.upper[i]),
-                    p.limits[i].to_string(),
-                    blank(p.values[i].map(|v| v / p.limits[i])),
-                    (p.floors[i] == c.governing_floor).to_string(),
-                    format!("{:?}", c.verdict).to_lowercase(),
-                ];
-                out += &row.join(",");
-                out.push('\n');
-            }
-        }
-        out
     }
 }
 

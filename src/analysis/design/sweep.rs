@@ -2,7 +2,7 @@
 //! each of several values and every other input random, as an engineer sizes a damper against a
 //! comfort limit. Every value sees the same storms (inputs, speeds, phases; common random numbers)
 //! and one allocation of storms to the wind strata, chosen for all the values' levels together,
-//! so that the levels differ by what the input does, not by sampling noise ([`super::annual_sample`]).
+//! so that the levels differ by what the input does, not by sampling noise ([`crate::analysis::sampling::annual_sample`]).
 
 use crate::analysis::answers::hazard::{MAX_SPEED, WIND_SPEED, return_level};
 use crate::analysis::responses::response::Response;
@@ -189,18 +189,6 @@ fn with_value(row: &[f64], index: usize, value: f64) -> Vec<f64> {
     let mut row = row.to_vec();
     row[index] = value;
     row
-}
-
-impl Sweep {
-    /// One row per value.
-    pub fn csv(&self, unit_tag: &str) -> String {
-        let blank = |x: Option<f64>| x.map_or(String::new(), |x| x.to_string());
-        let mut out = format!("{},level_{unit_tag},lower,upper\n", self.input);
-        for p in &self.results {
-            out += &format!("{},{},{},{}\n", p.input_value, blank(p.level), blank(p.lower), blank(p.upper));
-        }
-        out
-    }
 }
 
 #[cfg(test)]

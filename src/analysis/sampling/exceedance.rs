@@ -1,8 +1,6 @@
 //! Exceedance curves of peak responses: P(peak > x) over a threshold grid, with exact binomial
 //! (Clopper-Pearson) confidence bands, and the metamodel sampling that feeds them.
 
-use crate::analysis::certification::certify::Certification;
-use crate::analysis::responses::response::Response;
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 use statrs::distribution::{Beta, ContinuousCDF};
@@ -64,24 +62,6 @@ pub fn exceedance_curve(peaks: &[f64], thresholds: &[f64], confidence: f64) -> E
         upper.push(hi);
     }
     ExceedanceCurve { thresholds: thresholds.to_vec(), probabilities, lower, upper, samples: n, confidence }
-}
-
-/// The curve as CSV; a certified one with the metamodel's own probability and the correction.
-pub fn exceedance_csv(curve: &ExceedanceCurve, certification: Option<&Certification>, response: &Response) -> String {
-    let mut out = format!("threshold_{},probability,lower,upper", response.unit_tag());
-    if certification.is_some() {
-        out += ",metamodel_probability,mismatch_rate,correction,correction_lower,correction_upper";
-    }
-    out += "\n";
-    for i in 0..curve.thresholds.len() {
-        out += &format!("{},{},{},{}", curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]);
-        if let Some(c) = certification {
-            let row = [c.metamodel_probabilities[i], c.mismatch_rate[i], c.correction[i]];
-            out += &format!(",{},{},{},{},{}", row[0], row[1], row[2], c.correction_lower[i], c.correction_upper[i]);
-        }
-        out += "\n";
-    }
-    out
 }
 
 /// Largest vertical gap between the empirical exceedance curves of two samples (the two-sample

@@ -3,4 +3,5 @@
 //!
 //! The top room: it may import every other room, and none imports it.
 
+pub(super) mod csv;
 pub(super) mod plot;

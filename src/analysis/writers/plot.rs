@@ -4,6 +4,7 @@
 use crate::analysis::answers::fragility::Fragility;
 use crate::analysis::answers::hazard::HazardCurve;
 use crate::analysis::answers::profile::PeakProfile;
+use crate::analysis::certification::certify::Certification;
 use crate::analysis::design::serviceability::Serviceability;
 use crate::analysis::design::sweep::{Sweep, SweepPoint};
 use crate::analysis::sampling::exceedance::ExceedanceCurve;
@@ -214,6 +215,19 @@ pub fn profile_svg(profile: &PeakProfile, x_label: &str) -> String {
 /// Exceedance curves with their confidence bands.
 pub fn exceedance_svg(curves: &[(&str, &ExceedanceCurve)], x_label: &str) -> String {
     render((720, 480), |root| draw_curves(root, curves, x_label))
+}
+
+/// The figure of an exceedance curve labelled `label`; a certified one beside the metamodel's own
+/// curve with its band, as an uncertified answer would have drawn it.
+pub fn exceedance_figure(curve: &ExceedanceCurve, certification: Option<&Certification>, label: &str) -> String {
+    let Some(c) = certification else { return exceedance_svg(&[("PC-NARX", curve)], label) };
+    let metamodel = ExceedanceCurve {
+        probabilities: c.metamodel_probabilities.clone(),
+        lower: c.metamodel_lower.clone(),
+        upper: c.metamodel_upper.clone(),
+        ..curve.clone()
+    };
+    exceedance_svg(&[("PC-NARX", &metamodel), ("certified", curve)], label)
 }
 
 /// Validation figure: peaks scatter (left) and both exceedance curves (right).

@@ -1,6 +1,6 @@
 //! A serviceability check's certification: each criterion's governing floor corrected by storms
 //! run through both the reference model and the metamodel, as an annual curve is
-//! ([`crate::analysis::certified_hazard`]).
+//! ([`crate::analysis::certification::certified_hazard`]).
 
 use super::CriterionCheck;
 use crate::analysis::answers::hazard::return_level;
