@@ -13,7 +13,7 @@
 //!    stratified annual probabilities).
 //! 3. `certification`: the metamodel's estimates corrected by storms through both models.
 //! 4. `answers`: the analyses a user asks for, each with its options and `metamodel_*` entry
-//!    point (annual, fragility, profile, sensitivity, demands).
+//!    point (exceedance, annual, fragility, profile, sensitivity, demands).
 //! 5. `validation`: a metamodel against the reference model on fresh storms.
 //! 6. `design`: serviceability checks and sweeps, built on the annual answers.
 //! 7. `writers`: the answers as SVG figures and CSV tables; no analysis depends on them.
@@ -29,6 +29,7 @@ mod validation;
 mod writers;
 
 pub use answers::demands::{Demands, metamodel_demands};
+pub use answers::exceedance::{Exceedance, ExceedanceOptions, metamodel_exceedance};
 pub use answers::fragility::{
     Fragility, FragilityCurve, FragilityOptions, LognormalFragility, MAX_WIND_SPEEDS, fragility, metamodel_fragility,
 };
@@ -55,7 +56,8 @@ pub use sampling::climate::{
     ClimateCoverage, ClimateSpec, annual_probability_of_period, climate_or_own, period_of_annual_probability,
 };
 pub use sampling::draws::{
-    DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, check_samples, describe_diverged, metamodel_peaks, peaks_at,
+    DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, check_samples, describe_diverged, held_inputs, metamodel_peaks,
+    peaks_at,
 };
 pub use sampling::exceedance::{
     ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,

@@ -11,13 +11,13 @@
 
 use super::analyses::AnalysisJob;
 use super::cache::stored_metamodel;
-use super::exceedance::{ExceedanceJob, held_inputs};
+use super::exceedance::ExceedanceJob;
 use super::lease::LeaseKeeper;
 use super::store::Store;
 use super::supervision::{Supervision, blocking, through_faults};
 use super::tasks::{EXPERIMENTS_PER_TASK, Experiments, ReferenceTasks, TaskRequest, run_task, work_through_tasks};
 use super::{AppState, CalibrationRequest, ValidationJob};
-use crate::analysis::validate;
+use crate::analysis::{held_inputs, validate};
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, Silent};
 use crate::study::Study;

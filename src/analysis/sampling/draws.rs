@@ -7,10 +7,10 @@ use crate::analysis::responses::response::Response;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress};
 use crate::simd::LANES;
-use crate::study::Study;
+use crate::study::{Study, WIND_SPEED};
 use crate::surrogate::{BatchInput, BatchWorkspace, Metamodel, ModalScales, Reduction};
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
-use crate::wind::{self, ForceSource};
+use crate::wind::{self, ForceSource, WindLoads};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -44,6 +44,21 @@ pub fn check_samples(samples: usize) -> Result<()> {
         return Err(Error::invalid("samples", format!("must be between 1 and {MAX_SAMPLES}, got {samples}")));
     }
     Ok(())
+}
+
+/// The study's input model with the `fixed` inputs held at their values, the others drawn from
+/// their laws; errors name `fixed.<input>`: an input the study does not have, a value outside its
+/// law's support, a wind speed the wind model refuses.
+pub fn held_inputs(study: &Study, fixed: &BTreeMap<String, f64>) -> Result<InputModel> {
+    let mut inputs = study.inputs.clone();
+    for (name, value) in fixed {
+        let speed = if name == WIND_SPEED { WindLoads::check_speed(*value) } else { Ok(()) };
+        inputs = speed.and_then(|()| inputs.with_fixed(name, *value)).map_err(|error| match error {
+            Error::Invalid { reason, .. } => Error::invalid(format!("fixed.{name}"), reason),
+            other => other,
+        })?;
+    }
+    Ok(inputs)
 }
 
 /// The storms an analysis runs through the metamodel: row i's physical inputs, and the stream of
