@@ -34,7 +34,9 @@ pub struct FragilityOptions {
     /// Storms at each speed; the same structural draws and storm phases at every speed (common
     /// random numbers, so the curves are smooth in v).
     pub samples_per_speed: usize,
+    /// The seed of the structural draws and of the storms' phases.
     pub seed: u64,
+    /// The level of the bands and of the fits' intervals.
     pub confidence: f64,
     /// Certify every speed's probabilities with this many storms per speed through both models
     /// (the same structural draws and phases at every speed).
@@ -42,6 +44,7 @@ pub struct FragilityOptions {
 }
 
 impl FragilityOptions {
+    /// Checks everything but the sampling; errors name the field.
     pub fn check(&self) -> Result<()> {
         check_thresholds(&self.thresholds)?;
         check_confidence(self.confidence)?;
@@ -80,6 +83,7 @@ pub struct LognormalFragility {
     pub dispersion: f64,
     /// Intervals at the analysis's confidence; none where the likelihood is flat.
     pub median_speed_ci: Option<[f64; 2]>,
+    /// The interval of the dispersion.
     pub dispersion_ci: Option<[f64; 2]>,
 }
 
@@ -87,10 +91,13 @@ pub struct LognormalFragility {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct FragilityCurve {
+    /// The peak value (in the response's unit).
     pub threshold: f64,
+    /// P(peak > threshold | v) at each speed.
     pub probability: Vec<f64>,
     /// Clopper-Pearson band at the analysis's confidence.
     pub lower: Vec<f64>,
+    /// The band's upper end at each speed.
     pub upper: Vec<f64>,
     /// Fitted over the speeds where no storm diverged; none when none of them sees both exceeding
     /// and non-exceeding storms. A certified curve's is fitted to its probabilities, each
@@ -102,13 +109,17 @@ pub struct FragilityCurve {
     pub certification: Option<Certification>,
 }
 
+/// The fragility curves of one response, one per threshold, on a grid of storm speeds.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct Fragility {
     /// Storm speeds (m/s).
     pub wind_speeds: Vec<f64>,
+    /// One curve per threshold, in the order asked.
     pub curves: Vec<FragilityCurve>,
+    /// Storms at each speed (the same structural draws and phases at every speed).
     pub samples_per_speed: usize,
+    /// The level of the bands and of the fits' intervals.
     pub confidence: f64,
     /// The wind speeds of the calibration's experiments, lowest and highest (m/s).
     pub calibrated_wind_range: [f64; 2],

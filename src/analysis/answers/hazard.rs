@@ -46,21 +46,28 @@ pub(in crate::analysis) const MAX_SPEED: f64 = 150.0;
 pub struct HazardOptions {
     /// The law of the annual maximum storm speed.
     pub climate: Marginal,
+    /// Storms in all (a quarter of them the pilot, when stratified).
     pub samples: usize,
+    /// The seed of the storms' inputs, speeds and phases.
     pub seed: u64,
     /// Peak values at which to report λ; 50 spread over the sampled peaks when absent.
     pub thresholds: Option<Vec<f64>>,
+    /// Return periods (years) whose levels are reported.
     pub return_periods: Vec<f64>,
     /// A limit whose annual probability and reliability index are reported.
     pub limit: Option<f64>,
+    /// The level of the bands.
     pub confidence: f64,
+    /// How the wind speeds are drawn: stratified, or plain Monte Carlo as a check.
     pub sampling: Sampling,
     /// Certify the curve with this many storms through both the reference model and the
-    /// metamodel, spread over the wind strata ([`crate::analysis::certification::certified_hazard`]).
+    /// metamodel, spread over the wind strata and correcting the curve stratum by stratum (what
+    /// they did is the curve's [`HazardCertification`]).
     pub certify: Option<CertifyOptions>,
 }
 
 impl HazardOptions {
+    /// Checks everything but the sampling; errors name the field.
     pub fn check(&self) -> Result<()> {
         check_samples(self.samples)?;
         check_confidence(self.confidence)?;
@@ -106,12 +113,14 @@ impl HazardOptions {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ReturnLevel {
+    /// The mean recurrence interval T (years).
     pub return_period_years: f64,
     /// The level whose annual exceedance probability is 1 − exp(−1/T) (≈ 1/T for long periods;
     /// 0.632 for T = 1) (m); none when the sampled peaks do not reach so rare a level.
     pub value: Option<f64>,
     /// Where the band's ends cross that probability.
     pub lower: Option<f64>,
+    /// The level where the band's upper end crosses the level's probability.
     pub upper: Option<f64>,
 }
 
@@ -119,15 +128,21 @@ pub struct ReturnLevel {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct Reliability {
+    /// The limit (in the response's unit).
     pub limit: f64,
+    /// P(the year's peak > limit).
     pub annual_probability: f64,
+    /// The lower end of the annual probability's band.
     pub lower: f64,
+    /// The upper end of the annual probability's band.
     pub upper: f64,
+    /// The annual probability's coefficient of variation; none where no storm exceeded.
     pub cov: Option<f64>,
     /// None where the probability is 0 or 1 (β infinite).
     pub beta: Option<f64>,
     /// β at the band's ends (the upper probability gives the lower β); none where infinite.
     pub beta_lower: Option<f64>,
+    /// β at the band's lower end.
     pub beta_upper: Option<f64>,
 }
 
@@ -141,12 +156,15 @@ pub struct HazardCurve {
     pub annual_probability: Vec<f64>,
     /// The band at `confidence`.
     pub lower: Vec<f64>,
+    /// The band's upper end at each threshold.
     pub upper: Vec<f64>,
     /// Coefficient of variation of each probability; none where no storm exceeded.
     pub cov: Vec<Option<f64>>,
     /// Mean recurrence interval −1/ln(1 − P) (years, ≈ 1/P for small P); none where P is 0 or 1.
     pub mri_years: Vec<Option<f64>>,
+    /// The levels of the return periods asked for.
     pub return_levels: Vec<ReturnLevel>,
+    /// The limit's annual probability and reliability index, when a limit was asked for.
     pub reliability: Option<Reliability>,
     /// The law of the annual maximum storm speed at the 10 m station.
     pub climate: Marginal,
@@ -166,9 +184,13 @@ pub struct HazardCurve {
     /// The first few diverged storms with their inputs.
     #[serde(default)]
     pub first_diverged: Vec<DivergedStorm>,
+    /// Storms run.
     pub samples: usize,
+    /// Wind strata the storms were drawn in (1 for plain Monte Carlo).
     pub strata: usize,
+    /// How the wind speeds were drawn.
     pub sampling: Sampling,
+    /// The level of the bands.
     pub confidence: f64,
     /// What the reference storms did, when the curve was certified (then `annual_probability`,
     /// `lower`, `upper`, the return levels and the reliability are the certified ones).
@@ -180,7 +202,8 @@ pub struct HazardCurve {
 /// so that every row gets its own storm). Stratified, a quarter of the storms go equally to the
 /// strata and the rest by Neyman's allocation for the return periods asked for. Certified, the
 /// storms through both models that `pairs_of(rows, first)` returns, for rows drawn alike from the
-/// reference storms' seed, correct it stratum by stratum ([`crate::analysis::certification::certified_hazard`]).
+/// reference storms' seed, correct it stratum by stratum (what they did is the curve's
+/// [`HazardCertification`]).
 pub fn hazard_curve(
     inputs: &InputModel,
     options: &HazardOptions,

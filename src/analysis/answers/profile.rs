@@ -31,18 +31,22 @@ pub struct PeakProfile {
     /// Distribution-free band at `confidence`: order statistics x_(r) and x_(s) with
     /// P(r ≤ K < s) ≥ confidence, K ~ Binomial(samples, quantile).
     pub lower: Vec<f64>,
+    /// The band's upper end at each floor.
     pub upper: Vec<f64>,
     /// The mean peak at each floor.
     pub means: Vec<f64>,
+    /// Storms behind each floor's quantile.
     pub samples: usize,
+    /// The band's level.
     pub confidence: f64,
 }
 
 /// Peaks of a response at every floor where it exists, for each storm.
 #[derive(Debug, Clone)]
 pub struct ProfileSamples {
+    /// The response at each floor where it exists, bottom up.
     pub responses: Vec<Response>,
-    /// peaks[sample][i]: the peak of `responses[i]` in storm `sample`.
+    /// `peaks[sample][i]`: the peak of `responses[i]` in storm `sample`.
     pub peaks: Vec<Vec<f64>>,
 }
 

@@ -34,10 +34,13 @@ const BOOTSTRAP: usize = 500;
 pub struct SobolIndex {
     /// An input's name, or `storm` for the storm's phases.
     pub name: String,
+    /// The first-order index: the share of the peak's variance the group explains alone.
     pub first_order: f64,
+    /// The total index: the share it explains with all its interactions.
     pub total: f64,
     /// Bootstrap percentile intervals at the analysis's confidence.
     pub first_order_ci: [f64; 2],
+    /// The total index's interval.
     pub total_ci: [f64; 2],
 }
 
@@ -45,6 +48,7 @@ pub struct SobolIndex {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct Sensitivity {
+    /// Every non-constant input's indices, then the storm's.
     pub indices: Vec<SobolIndex>,
     /// N: rows of each of A and B.
     pub samples: usize,
@@ -52,7 +56,9 @@ pub struct Sensitivity {
     pub evaluations: usize,
     /// Mean and variance of the peak over A and B.
     pub mean: f64,
+    /// The variance of the peak over A and B.
     pub variance: f64,
+    /// The level of the intervals.
     pub confidence: f64,
 }
 

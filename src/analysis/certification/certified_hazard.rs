@@ -44,6 +44,7 @@ const PREDICTION_SAFETY: f64 = 3.0;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct HazardCertification {
+    /// The annual curve's certification threshold by threshold, each figure combined over the strata.
     #[serde(flatten)]
     pub points: Certification,
     /// Per threshold: the part of the band's half-width that bounds the strata left uncorrected,
@@ -64,13 +65,19 @@ pub struct PairedStrata {
 
 /// A certified annual probability and what made it.
 pub struct CertifiedPoint {
+    /// The certified estimate with its band.
     pub estimate: Estimate,
     /// The metamodel's own estimate.
     pub metamodel: Estimate,
+    /// The rate at which the two models disagree about x, combined over the strata.
     pub mismatch_rate: f64,
+    /// What the pairs added to the metamodel's probability.
     pub correction: f64,
+    /// The lower end of the correction's band.
     pub correction_lower: f64,
+    /// The upper end of the correction's band.
     pub correction_upper: f64,
+    /// The bound on what the strata left uncorrected might have corrected, added to the band.
     pub uncorrected_bound: f64,
 }
 

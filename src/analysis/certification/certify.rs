@@ -93,7 +93,9 @@ pub struct Certification {
     /// The metamodel's own exceedance probabilities (its storms alone), with their
     /// Clopper-Pearson band at the curve's confidence: what an uncertified answer would say.
     pub metamodel_probabilities: Vec<f64>,
+    /// The lower end of the metamodel's own band.
     pub metamodel_lower: Vec<f64>,
+    /// The upper end of the metamodel's own band.
     pub metamodel_upper: Vec<f64>,
     /// Fraction of the reference storms where the two models fall on different sides of the
     /// threshold, the metamodel's peaks scaled by the factor the pairs show.
@@ -103,6 +105,7 @@ pub struct Certification {
     pub correction: Vec<f64>,
     /// The correction's band at the curve's confidence.
     pub correction_lower: Vec<f64>,
+    /// The upper end of the correction's band.
     pub correction_upper: Vec<f64>,
 }
 
@@ -123,8 +126,11 @@ pub fn check_reference_storms(storms: usize, samples: usize, field: &str) -> Res
 /// A certified curve, what its correction was, and the variance its band stands for at each
 /// threshold (the adjusted estimators' summed, before the band is clipped to [0, 1]).
 pub struct CertifiedCurve {
+    /// The certified curve with its band.
     pub curve: ExceedanceCurve,
+    /// What the reference storms did to it, threshold by threshold.
     pub certification: Certification,
+    /// The variance the band stands for at each threshold.
     pub variance: Vec<f64>,
 }
 
@@ -133,10 +139,11 @@ pub struct CertifiedCurve {
 ///
 /// A metamodel whose peaks run a few per cent off the reference's disagrees with it on every storm
 /// near a threshold, and each disagreement widens the band. So the metamodel's peaks are first
-/// scaled by the factor its pairs show ([`CrossFitted`]), and the pairs correct what the scaled
-/// peaks still get wrong: P̂ = Σ_h (n_h/N)·P_M(c_h·L > t) + (1/N)·Σ_i (I_H,i − 1[c_h(i)·L_i > t]).
-/// Each half h of the pairs is corrected with a factor the other half chose, which keeps every
-/// term unbiased for the reference whatever the factor.
+/// scaled by the factor its pairs show (the median ratio of the two models' peaks), and the pairs
+/// correct what the scaled peaks still get wrong:
+/// P̂ = Σ_h (n_h/N)·P_M(c_h·L > t) + (1/N)·Σ_i (I_H,i − 1[c_h(i)·L_i > t]). Each half h of the
+/// pairs is corrected with a factor the other half chose, which keeps every term unbiased for the
+/// reference whatever the factor.
 pub fn certified_curve(
     metamodel_peaks: &[f64],
     paired: &[PairedPeak],
@@ -266,7 +273,9 @@ impl AdjustedProportion {
 
 /// A difference of paired proportions, adjusted.
 pub(super) struct AdjustedDifference {
+    /// The adjusted difference, the centre of its band.
     pub centre: f64,
+    /// The variance of the adjusted difference.
     pub variance: f64,
 }
 

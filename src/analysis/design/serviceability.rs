@@ -35,12 +35,17 @@ use statrs::distribution::{ContinuousCDF, Normal};
 pub struct ServiceabilityOptions {
     /// The law of the annual maximum storm speed.
     pub climate: Marginal,
+    /// The criteria judged, each against its own limit or target.
     pub criteria: Vec<Criterion>,
+    /// Storms in all (a quarter of them the pilot), each through every criterion and floor.
     pub samples: usize,
+    /// The seed of the storms' inputs, speeds and phases.
     pub seed: u64,
+    /// The level of the bands.
     pub confidence: f64,
     /// Certify each criterion's governing floor with this many storms through both the reference
-    /// model and the metamodel, shared out over the wind strata ([`crate::analysis::certification::certified_hazard`]).
+    /// model and the metamodel, shared out over the wind strata as an annual curve's are
+    /// ([`crate::analysis::HazardOptions::certify`]).
     pub certify: Option<CertifyOptions>,
 }
 
@@ -61,11 +66,13 @@ pub enum Verdict {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct LevelProfile {
+    /// The judged floors, bottom up.
     pub floors: Vec<usize>,
     /// The T-year level at each floor; none where the sampled storms do not reach so rare a level.
     pub values: Vec<Option<f64>>,
     /// Where the band's ends cross the level's probability.
     pub lower: Vec<Option<f64>>,
+    /// The level where the band's upper end crosses the level's probability, at each floor.
     pub upper: Vec<Option<f64>>,
     /// The limit at each floor (SI).
     pub limits: Vec<f64>,
@@ -76,12 +83,17 @@ pub struct LevelProfile {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct StrengthCheck {
+    /// The building's risk category.
     pub risk_category: RiskCategory,
+    /// The consequence of the failure the limit marks.
     pub failure: FailureMode,
     /// The floor of the largest annual probability.
     pub floor: usize,
+    /// The annual probability of exceeding the limit at that floor.
     pub annual_probability: f64,
+    /// The lower end of the annual probability's band.
     pub lower: f64,
+    /// The upper end of the annual probability's band.
     pub upper: f64,
     /// −Φ⁻¹ of the annual probability; none where it is 0 or 1.
     pub beta: Option<f64>,
@@ -97,17 +109,23 @@ pub struct StrengthCheck {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CriterionCheck {
+    /// The criterion's name, as the request gave it.
     pub name: String,
+    /// The response judged.
     pub response: ResponseKind,
+    /// Whether each storm's peak or its RMS is judged.
     pub statistic: Statistic,
     /// The response's SI unit.
     pub unit: String,
+    /// The return period (years) whose level is judged.
     pub return_period_years: f64,
     /// The floor of the largest utilisation.
     pub governing_floor: usize,
     /// The T-year level at the governing floor, with its band.
     pub value: Option<f64>,
+    /// The level where the band's lower end crosses the level's probability.
     pub lower: Option<f64>,
+    /// The level where the band's upper end crosses the level's probability.
     pub upper: Option<f64>,
     /// The limit at the governing floor (SI).
     pub limit: f64,
@@ -117,7 +135,9 @@ pub struct CriterionCheck {
     /// some lower end is beyond, else `inconclusive`; for a strength criterion the same of the
     /// annual probability's band against the target.
     pub verdict: Verdict,
+    /// The T-year level at every judged floor.
     pub profile: LevelProfile,
+    /// A strength criterion's annual probability against its target.
     pub strength: Option<StrengthCheck>,
     /// What the reference storms did, when the check was certified: then the governing floor's
     /// level, band and utilisation (and its entry in `profile`) are the certified ones, and the
@@ -133,11 +153,15 @@ pub struct Serviceability {
     pub climate: Marginal,
     /// Storms run, each through every criterion and floor.
     pub samples: usize,
+    /// Wind strata the storms were drawn in.
     pub strata: usize,
+    /// The level of the bands.
     pub confidence: f64,
+    /// Each criterion's outcome, in the order asked.
     pub criteria: Vec<CriterionCheck>,
     /// Storms whose free run diverged, counted as exceeding every level.
     pub diverged_storms: usize,
+    /// The first few diverged storms with their inputs.
     #[serde(default)]
     pub first_diverged: Vec<DivergedStorm>,
     /// The climate's probability of storms too rare to be run; counted as exceeding.

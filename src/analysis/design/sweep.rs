@@ -25,13 +25,17 @@ pub const MAX_SWEEP_VALUES: usize = 20;
 pub struct SweepOptions {
     /// The swept input's name (a random input of the metamodel other than the wind speed).
     pub input: String,
+    /// The values the input is held at, each inside its law's support.
     pub values: Vec<f64>,
     /// The law of the annual maximum storm speed.
     pub climate: Marginal,
+    /// The return period (years) whose level is swept.
     pub return_period_years: f64,
     /// Storms at each value (the same storms at every value).
     pub samples: usize,
+    /// The seed of the storms' inputs, speeds and phases.
     pub seed: u64,
+    /// The level of the bands.
     pub confidence: f64,
 }
 
@@ -39,12 +43,14 @@ pub struct SweepOptions {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct SweepPoint {
+    /// The value the input was held at.
     pub input_value: f64,
     /// The level exceeded in a year with probability 1 − exp(−1/T); none where the sampled storms
     /// do not reach so rare a level.
     pub level: Option<f64>,
     /// Where the band's ends cross that probability.
     pub lower: Option<f64>,
+    /// The level where the band's upper end crosses the level's probability.
     pub upper: Option<f64>,
 }
 
@@ -52,8 +58,11 @@ pub struct SweepPoint {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct Sweep {
+    /// The swept input's name.
     pub input: String,
+    /// The return period (years) whose level was swept.
     pub return_period_years: f64,
+    /// The level at each value, in the order asked.
     pub results: Vec<SweepPoint>,
     /// The input's lowest and highest values among the calibration's experiments: beyond them the
     /// metamodel extrapolates.
@@ -62,10 +71,13 @@ pub struct Sweep {
     pub climate: Marginal,
     /// Storms run at each value.
     pub samples: usize,
+    /// Wind strata the storms were drawn in.
     pub strata: usize,
+    /// The level of the bands.
     pub confidence: f64,
     /// Storms whose free run diverged at some value, counted as exceeding every level there.
     pub diverged_storms: usize,
+    /// The first few diverged storms with their inputs.
     #[serde(default)]
     pub first_diverged: Vec<DivergedStorm>,
 }

@@ -5,7 +5,9 @@ use serde::Serialize;
 /// Mean, sample standard deviation and quantiles of a set of peaks.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct PeakSummary {
+    /// The mean peak.
     pub mean: f64,
+    /// The sample standard deviation of the peaks.
     pub sd: f64,
     /// (probability, value) pairs.
     pub quantiles: Vec<(f64, f64)>,
@@ -15,6 +17,8 @@ pub struct PeakSummary {
 pub const REPORTED_PROBABILITIES: [f64; 7] = [0.01, 0.05, 0.25, 0.5, 0.75, 0.95, 0.99];
 
 impl PeakSummary {
+    /// The summary of `values` (at least one), its quantiles at the reported probabilities (1, 5,
+    /// 25, 50, 75, 95 and 99 %).
     pub fn of(values: &[f64]) -> Self {
         let n = values.len() as f64;
         let mean = values.iter().sum::<f64>() / n;

@@ -31,22 +31,46 @@ pub fn rms_stride(time_step: f64) -> usize {
 #[serde(into = "ResponseName", try_from = "ResponseName")]
 pub enum Response {
     /// Displacement of a floor (1-based; the roof is the top floor), m.
-    Displacement { floor: usize },
+    Displacement {
+        /// The floor (1-based).
+        floor: usize,
+    },
     /// Inter-storey drift u_floor − u_{floor−1} (the ground does not move), m.
-    Drift { floor: usize },
+    Drift {
+        /// The floor above the storey (1-based).
+        floor: usize,
+    },
     /// Floor acceleration (the ground does not move, so relative and absolute agree), m/s².
-    Acceleration { floor: usize },
+    Acceleration {
+        /// The floor (1-based).
+        floor: usize,
+    },
     /// Root mean square of a floor's acceleration over the storm, m/s²: the quantity of
     /// ISO 6897-type comfort criteria. Its "peak" (the one value per storm) is the RMS.
-    RmsAcceleration { floor: usize },
+    RmsAcceleration {
+        /// The floor (1-based).
+        floor: usize,
+    },
     /// Axial force of the damper in the storey below the floor, N.
-    DamperForce { floor: usize },
+    DamperForce {
+        /// The floor above the damper (1-based).
+        floor: usize,
+    },
     /// Axial elongation of that damper's brace from the unloaded frame, cos θ·(u_floor − u_{floor−1}), m.
-    DamperStroke { floor: usize },
+    DamperStroke {
+        /// The floor above the damper (1-based).
+        floor: usize,
+    },
     /// The largest axial force among the dampers of a group (1-based), N.
-    GroupDamperForce { group: usize },
+    GroupDamperForce {
+        /// The damper coefficient group (1-based).
+        group: usize,
+    },
     /// The largest brace elongation among the dampers of a group (1-based), m.
-    GroupDamperStroke { group: usize },
+    GroupDamperStroke {
+        /// The damper coefficient group (1-based).
+        group: usize,
+    },
 }
 
 /// A response's kind, as requests and answers name it.
@@ -140,6 +164,7 @@ impl ResponseKind {
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct ResponseName {
+    /// The response's kind.
     pub kind: ResponseKind,
     /// Floor (1-based); absent for a damper group's envelope.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -185,6 +210,7 @@ impl Response {
         }
     }
 
+    /// The response's kind, as requests name it (a group's envelope has its dampers' kind).
     pub fn kind(&self) -> ResponseKind {
         match self {
             Response::Displacement { .. } => ResponseKind::Displacement,
@@ -312,8 +338,8 @@ impl Response {
     }
 
     /// The one value per storm of this response's `history` of steps of `time_step` (s): for an
-    /// RMS acceleration the RMS of every [`rms_stride`]-th step from the first, otherwise the peak
-    /// absolute value.
+    /// RMS acceleration the RMS of the steps 0.1 s apart (to the nearest whole step: `rms_stride`)
+    /// from the first, otherwise the peak absolute value.
     pub fn of_history(&self, history: &[f64], time_step: f64) -> f64 {
         match self {
             Response::RmsAcceleration { .. } => {
@@ -388,10 +414,15 @@ pub(super) fn damper_below(structure: &Structure, floor: usize) -> Result<usize>
 /// What a response is read from: one sample's motion, its reduced model and its loads. The modal
 /// accelerations are computed once, when a response first needs them.
 pub struct ResponseView<'a> {
+    /// The mode shapes: `shapes[m][f]` is mode m's component at floor f + 1.
     pub shapes: &'a [Vec<f64>],
+    /// The structure the floors and dampers belong to.
     pub structure: &'a Structure,
+    /// The sample's modal displacements and velocities.
     pub motion: &'a ModalMotion,
+    /// The sample's reduced model (modes, damping, dampers), for the equations of motion.
     pub model: &'a SampleModel<'a>,
+    /// The storm's modal forces on the motion's time grid.
     pub forces: &'a ModalForces,
     /// The storm's time step (s).
     pub time_step: f64,
@@ -399,6 +430,7 @@ pub struct ResponseView<'a> {
 }
 
 impl<'a> ResponseView<'a> {
+    /// A view of one sample's motion; the modal accelerations are computed on first use.
     pub fn new(
         shapes: &'a [Vec<f64>],
         structure: &'a Structure,

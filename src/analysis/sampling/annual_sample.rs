@@ -15,7 +15,9 @@ pub const PILOT_SHARE: usize = 4;
 /// The storms of an annual sample: how their inputs are drawn, how many, and where the metamodel
 /// was calibrated.
 pub struct AnnualDesign<'a> {
+    /// How the storms' inputs are drawn.
     pub rows: StormRows<'a>,
+    /// Storms in all, pilot included.
     pub samples: usize,
     /// The calibration's lowest and highest wind speeds (m/s).
     pub calibrated: [f64; 2],
@@ -26,11 +28,13 @@ pub type Aim = (usize, f64);
 
 /// Every column's stratified peaks, from the same storms.
 pub struct AnnualSample {
+    /// Each column's peaks, by stratum.
     pub columns: Vec<StratifiedPeaks>,
     /// Storms run (each through every column).
     pub storms: usize,
     /// Storms whose free run diverged in some column (infinite peaks there, exceeding every level).
     pub diverged: usize,
+    /// The first few diverged storms with their inputs.
     pub first_diverged: Vec<DivergedStorm>,
 }
 

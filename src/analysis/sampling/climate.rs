@@ -15,7 +15,9 @@ use std::collections::BTreeMap;
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(untagged)]
 pub enum ClimateSpec {
+    /// The speeds of two or more return periods, through which a Gumbel law is drawn.
     ReturnPeriodSpeeds(ReturnPeriodSpeeds),
+    /// The law of the annual maximum speed itself.
     Marginal(Marginal),
 }
 
@@ -109,6 +111,7 @@ pub fn climate_or_own(spec: Option<&ClimateSpec>, study: &crate::study::Study) -
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct ClimateCoverage {
+    /// The climate whose speeds the calibration must cover.
     pub climate: ClimateSpec,
     /// The rarest annual exceedance probability the answers must reach (10⁻⁵: the 100 000-year speed).
     #[serde(default = "rarest_default")]

@@ -1,6 +1,7 @@
 //! Sampling a metamodel's peaks in parallel, for every analysis: storms drawn from the input
 //! model (or given rows of inputs and their storm streams), run by batches of [`LANES`] through
-//! the free run, reduced to the peaks of one or several responses.
+//! the free run, reduced to the peaks of one or several responses; and the input model with some
+//! inputs held that such storms are drawn from.
 
 use crate::analysis::responses::motion_peaks::motion_sink;
 use crate::analysis::responses::response::Response;
@@ -65,10 +66,15 @@ pub fn held_inputs(study: &Study, fixed: &BTreeMap<String, f64>) -> Result<Input
 /// the run seeded with `seed` its wind is drawn from (two rows with the same stream see the same
 /// storm phases, which common random numbers and Sobol's pick-freeze designs rely on).
 pub struct Draws<'a> {
+    /// The study the storms are drawn in (structure, input model, storm duration and step).
     pub study: &'a Study,
+    /// The physical inputs of each storm, one row per storm.
     pub rows: &'a [Vec<f64>],
+    /// The stream of `seed` each row's wind is drawn from, one per row.
     pub storms: &'a [usize],
+    /// The seed whose streams the winds are drawn from.
     pub seed: u64,
+    /// What a storm whose free run diverges does to the analysis.
     pub on_divergence: OnDivergence,
 }
 

@@ -1,5 +1,8 @@
-//! Exceedance curves of peak responses: P(peak > x) over a threshold grid, with exact binomial
-//! (Clopper-Pearson) confidence bands, and the metamodel sampling that feeds them.
+//! The exceedance estimator of a sample of peaks: P(peak > x) over a threshold grid with exact
+//! binomial (Clopper-Pearson) confidence bands, the checks of thresholds and confidence levels
+//! that every analysis shares, and the largest gap between two samples' curves. The sampling
+//! that feeds it is in [`super::draws`]; the answer a user asks for, `metamodel_exceedance`, is
+//! in the answers room.
 
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
@@ -9,13 +12,17 @@ use statrs::distribution::{Beta, ContinuousCDF};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ExceedanceCurve {
+    /// The peak values (in the response's unit) at which the curve is evaluated.
     pub thresholds: Vec<f64>,
     /// Fraction of samples whose peak exceeds each threshold.
     pub probabilities: Vec<f64>,
     /// Clopper-Pearson band at `confidence`.
     pub lower: Vec<f64>,
+    /// The band's upper end at each threshold.
     pub upper: Vec<f64>,
+    /// Storms whose peaks the curve counts.
     pub samples: usize,
+    /// The band's level.
     pub confidence: f64,
 }
 
@@ -38,6 +45,7 @@ pub(in crate::analysis) fn clopper_pearson(k: f64, n: f64, confidence: f64) -> (
     (lower, upper)
 }
 
+/// Errs unless 0 < `confidence` < 1, naming the field `confidence`.
 pub fn check_confidence(confidence: f64) -> Result<()> {
     if confidence > 0.0 && confidence < 1.0 {
         Ok(())

@@ -17,7 +17,9 @@ use std::sync::atomic::{AtomicUsize, Ordering};
 /// its free run diverged: it exceeds every threshold).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct PairedPeak {
+    /// The reference model's peak.
     pub reference: f64,
+    /// The metamodel's peak in the same storm; infinite when its free run diverged.
     pub metamodel: f64,
 }
 
@@ -53,11 +55,15 @@ pub fn reference_rows(inputs: &InputModel, storms: usize, seed: u64) -> (Vec<Vec
 /// the seed of their winds, the response read and the reference's order.
 #[derive(Clone, Copy)]
 pub struct PairedRuns<'a> {
+    /// The metamodel run beside the reference.
     pub metamodel: &'a Metamodel,
+    /// The study whose reference model runs the storms.
     pub study: &'a Study,
     /// The reference storms' seed ([`reference_storm_seed`] of the request's).
     pub seed: u64,
+    /// The response whose peaks are compared.
     pub response: Response,
+    /// The reference model: the retained modes or every floor.
     pub order: Order,
 }
 

@@ -62,6 +62,7 @@ impl WindStrata {
         WindStrata { bounds: vec![1.0, 0.0] }
     }
 
+    /// The number of strata.
     pub fn count(&self) -> usize {
         self.bounds.len() - 1
     }
@@ -118,9 +119,13 @@ impl WindStrata {
 /// How an annual analysis draws its storms' inputs: every input from its law, the wind speed
 /// from the climate within each stratum.
 pub struct StormRows<'a> {
+    /// The input model every other input is drawn from.
     pub inputs: &'a InputModel,
+    /// The wind speed's position among the inputs.
     pub wind: usize,
+    /// The law of the annual maximum storm speed.
     pub climate: &'a Marginal,
+    /// The strata of the climate's tail the speeds are drawn in.
     pub strata: &'a WindStrata,
 }
 
@@ -156,8 +161,11 @@ pub fn pilot(strata: &WindStrata, storms: usize, share: usize, field: &str) -> R
 /// An estimated probability with its error.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Estimate {
+    /// The estimated probability.
     pub probability: f64,
+    /// The lower end of its band.
     pub lower: f64,
+    /// The upper end of its band.
     pub upper: f64,
     /// Coefficient of variation; none when no sampled storm exceeds.
     pub cov: Option<f64>,
@@ -278,11 +286,13 @@ impl StratifiedPeaks {
 
 /// The sampled strata's part of an exceedance probability.
 pub(in crate::analysis) struct SampledPart {
+    /// The sampled strata's part of the probability.
     pub probability: f64,
     /// The variance of `probability`.
     pub variance: f64,
     /// Its band.
     pub lower: f64,
+    /// Its band's upper end.
     pub upper: f64,
     /// The part of `probability` from storms outside the calibrated speeds.
     pub beyond: f64,

@@ -2,7 +2,7 @@
 //! the same wind through both.
 //!
 //! May import `responses`, `sampling`, `certification` and
-//! `answers` (today it needs only the first two).
+//! `answers` (it uses only the first two).
 
 pub(super) mod validate;
 pub(super) mod validated_responses;

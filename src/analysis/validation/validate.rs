@@ -27,7 +27,9 @@ use std::time::Instant;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ValidationReport {
+    /// Storms run through both models.
     pub samples: usize,
+    /// The seed of their inputs and winds.
     pub seed: u64,
     /// Inputs held at a value for this validation (e.g. the wind speed at an end of the calibrated
     /// range); the others were drawn from the input model.
@@ -51,12 +53,17 @@ pub struct ValidationReport {
     pub responses: Vec<ResponseValidation>,
     /// Largest vertical gap between the two empirical exceedance curves of the roof peak.
     pub max_exceedance_gap: f64,
+    /// The reference's exceedance curve of the roof peak, at thresholds spread over both models' peaks.
     pub reference_exceedance: ExceedanceCurve,
+    /// The metamodel's exceedance curve of the roof peak, at the reference's thresholds.
     pub metamodel_exceedance: ExceedanceCurve,
+    /// The reference's peak roof displacement in each storm (m).
     pub reference_peak: Vec<f64>,
+    /// The metamodel's peak roof displacement in the same storms (m).
     pub metamodel_peak: Vec<f64>,
     /// Median wall time per sample (s) of the reference integration and of the metamodel free run.
     pub reference_seconds_per_sample: f64,
+    /// Median wall time per sample (s) of the metamodel's free run.
     pub metamodel_seconds_per_sample: f64,
 }
 

@@ -24,10 +24,12 @@ pub struct CheckedPeaks {
 }
 
 impl CheckedPeaks {
+    /// The sample's peak roof displacement (m).
     pub fn roof_displacement(&self) -> f64 {
         self.roof_displacement
     }
 
+    /// The peaks of every checked response in the sample `view` shows.
     pub fn of(view: &ResponseView) -> Result<CheckedPeaks> {
         let floors = view.structure.floors();
         let drifts = (1..=floors).map(|floor| Response::Drift { floor }.peak(view)).collect::<Result<_>>()?;
@@ -56,6 +58,7 @@ impl CheckedPeaks {
 pub struct ResponseValidation {
     /// `displacement`, `drift`, `acceleration`, `rms_acceleration` or `damper_force`.
     pub response: ResponseKind,
+    /// The floor (for a damper force, the floor above the damper).
     pub floor: usize,
     /// Unit of the peaks: m, m/s² or N.
     pub unit: String,
@@ -64,9 +67,13 @@ pub struct ResponseValidation {
     /// Mean of the metamodel's peaks on the same storms: beside the reference's, the bias.
     #[serde(default)]
     pub mean_metamodel_peak: f64,
+    /// Pearson correlation of the peaks, reference against metamodel.
     pub peak_correlation: f64,
+    /// Median over the storms of |peak_meta − peak_ref| / |peak_ref|.
     pub median_peak_relative_error: f64,
+    /// 95th percentile over the storms of the same relative error.
     pub p95_peak_relative_error: f64,
+    /// Largest vertical gap between the two empirical exceedance curves of the peaks.
     pub max_exceedance_gap: f64,
 }
 

@@ -1,5 +1,6 @@
-//! SVG figures: exceedance curves with their bands (the paper's Fig. 7), the scatter of peaks,
-//! reference against metamodel (Fig. 6), annual curves with return levels, and fragility curves.
+//! SVG figures: exceedance curves with their bands (the paper's Fig. 7), a certified one beside
+//! the metamodel's own, the scatter of peaks, reference against metamodel (Fig. 6), annual curves
+//! with return levels, fragility curves, peak profiles, serviceability checks and sweeps.
 
 use crate::analysis::answers::fragility::Fragility;
 use crate::analysis::answers::hazard::HazardCurve;

@@ -22,6 +22,7 @@ pub(in crate::analysis) fn lognormal_scatter_level(climate: &Marginal, sigma: f6
     0.5 * (lo + hi)
 }
 
+/// The toy's inputs: z, standard normal, and the wind speed (Fréchet, mean 30 m/s, sd 3.5 m/s).
 pub(in crate::analysis) fn toy_inputs() -> InputModel {
     InputModel::new(vec![
         Input { name: "z".into(), marginal: Marginal::Normal { mean: 0.0, sd: 1.0 } },

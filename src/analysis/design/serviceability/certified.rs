@@ -14,12 +14,17 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CriterionCertification {
+    /// The governing floor, the one certified.
     pub floor: usize,
+    /// Storms run through both the reference model and the metamodel.
     pub reference_storms: usize,
+    /// The reference model they were run through.
     pub order: Order,
     /// The metamodel's own level and band at that floor.
     pub metamodel_value: Option<f64>,
+    /// The lower end of the metamodel's own band.
     pub metamodel_lower: Option<f64>,
+    /// The upper end of the metamodel's own band.
     pub metamodel_upper: Option<f64>,
 }
 

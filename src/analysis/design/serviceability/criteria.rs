@@ -37,6 +37,7 @@ pub struct Criterion {
     /// `displacement`, `drift`, `acceleration`, `damper_force` or `damper_stroke` (an RMS
     /// acceleration is `acceleration` with `statistic` `rms`).
     pub response: ResponseKind,
+    /// Which value of each storm is judged: its peak (the default) or, for an acceleration, its RMS.
     #[serde(default)]
     pub statistic: Statistic,
     /// The return period (years, from 1 to 10⁶) whose level is judged: the level exceeded in a year
@@ -68,9 +69,13 @@ pub struct Criterion {
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub enum RiskCategory {
+    /// Buildings whose failure is a low risk to human life.
     I,
+    /// Buildings not in categories I, III and IV (offices, dwellings).
     II,
+    /// Buildings whose failure is a substantial risk to human life (assembly, schools).
     III,
+    /// Essential facilities (hospitals, emergency services).
     IV,
 }
 
@@ -92,7 +97,9 @@ pub enum FailureMode {
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct StrengthTarget {
+    /// The building's risk category.
     pub risk_category: RiskCategory,
+    /// The consequence of the failure the limit marks.
     pub failure: FailureMode,
 }
 
@@ -172,6 +179,7 @@ pub fn built_in(name: &str, floors: usize) -> Result<Criterion> {
 pub enum CriterionChoice {
     /// `nbcc-residential`, `nbcc-office` or `drift-h400`.
     BuiltIn(String),
+    /// A criterion given in full.
     Defined(Criterion),
 }
 
@@ -200,7 +208,9 @@ impl CriterionChoice {
 /// A criterion made concrete for a building: the response at each judged floor and its limit.
 #[derive(Debug, Clone)]
 pub struct ResolvedCriterion {
+    /// The criterion as given.
     pub criterion: Criterion,
+    /// The response at each judged floor, bottom up.
     pub responses: Vec<Response>,
     /// The limit at each of `responses` (SI).
     pub limits: Vec<f64>,

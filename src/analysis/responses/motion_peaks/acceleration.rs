@@ -139,7 +139,7 @@ pub(super) struct Steps<'a> {
     pub(super) modes: usize,
 }
 
-/// A floor's acceleration as [`Target::Acceleration`] holds it.
+/// A floor's acceleration as [`super::Target::Acceleration`] holds it.
 pub(super) struct Floor<'a> {
     pub(super) shape: &'a [f64],
     pub(super) modal: &'a [Lanes],
