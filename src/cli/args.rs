@@ -2,9 +2,10 @@
 
 use crate::analysis::{CertifyOptions, Response, ResponseKind};
 use crate::error::{Error, Result};
-use crate::study::{Order, Study, StudySpec};
+use crate::study::{Order, Study, StudySpec, WIND_SPEED};
 use crate::uncertainty::{InputModel, parse_assignment};
 use clap::Args;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 /// The study a command runs on: a preset or a spec file, with command-line overrides.
@@ -78,6 +79,20 @@ pub struct SamplingArgs {
 }
 
 impl SamplingArgs {
+    /// The inputs held by `--wind-speed` and the `--fix NAME=VALUE` assignments, by name, as an
+    /// analysis's options take them; an input held twice is refused.
+    pub fn fixed(&self) -> Result<BTreeMap<String, f64>> {
+        let mut fixed = BTreeMap::new();
+        let wind_speed = self.wind_speed.map(|v| (WIND_SPEED.to_string(), v));
+        let assignments = self.fix.iter().map(|a| parse_assignment(a)).collect::<Result<Vec<_>>>()?;
+        for (name, value) in wind_speed.into_iter().chain(assignments) {
+            if fixed.insert(name.clone(), value).is_some() {
+                return Err(Error::invalid("fix", format!("`{name}` is held twice")));
+            }
+        }
+        Ok(fixed)
+    }
+
     /// The metamodel's input model `inputs` with the wind speed and the `--fix NAME=VALUE`
     /// assignments held.
     pub fn held_inputs(&self, inputs: &InputModel) -> Result<InputModel> {

@@ -4,10 +4,10 @@ use super::args::{CertifyArgs, ResponseArgs, SamplingArgs, out_format, write_out
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    OnThisMachine, STANDARD_GRAVITY, automatic_thresholds, certify_exceedance, check_confidence,
-    check_reference_storms, exceedance_csv, exceedance_figure, metamodel_peaks,
+    Exceedance, ExceedanceOptions, OnThisMachine, STANDARD_GRAVITY, exceedance_csv, exceedance_figure,
+    metamodel_exceedance,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
@@ -41,38 +41,22 @@ pub struct ExceedanceArgs {
 
 /// Runs `windmeta exceedance`: the curve with its band.
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
-    check_confidence(args.confidence)?;
+    let options = ExceedanceOptions {
+        samples: args.sampling.samples,
+        seed: args.seed,
+        fixed: args.sampling.fixed()?,
+        thresholds: args.thresholds.clone(),
+        confidence: args.confidence,
+        profile_quantile: None,
+        certify: args.certify.options(),
+    };
+    options.check()?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.sampling.model)?;
     let response = args.response.response(&study)?;
-    let inputs = args.sampling.held_inputs(&study.inputs)?;
-    if let Some(t) = &args.thresholds
-        && (t.is_empty() || t.iter().any(|x| !x.is_finite()))
-    {
-        return Err(Error::invalid("thresholds", "must be a non-empty list of finite numbers"));
-    }
-    let certify = args.certify.options();
-    if let Some(options) = &certify {
-        check_reference_storms(options.reference_storms, args.sampling.samples, "certify")?;
-    }
     let started = Instant::now();
-    let counter = Counter(started);
-    let peaks = metamodel_peaks(&metamodel, &study, &inputs, args.sampling.samples, args.seed, response, &counter)?;
-    let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-    let (seed, confidence) = (args.seed, args.confidence);
-    let (curve, certification) = certify_exceedance(
-        &metamodel,
-        &study,
-        &inputs,
-        &peaks,
-        &thresholds,
-        certify.as_ref(),
-        seed,
-        response,
-        confidence,
-        &OnThisMachine,
-        &counter,
-    )?;
+    let Exceedance { curve, certification, .. } =
+        metamodel_exceedance(&metamodel, &study, response, &options, &OnThisMachine, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = response.per_storm();
     if let (Some(path), Some(format)) = (&args.out, format) {
@@ -104,8 +88,8 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
         out += &format!("  {:>10}  {:>10}", "metamodel", "mismatch");
     }
     out += "\n";
-    let step = (thresholds.len() / 12).max(1);
-    for i in (0..thresholds.len()).step_by(step) {
+    let step = (curve.thresholds.len() / 12).max(1);
+    for i in (0..curve.thresholds.len()).step_by(step) {
         out += &format!(
             "{:>12.5}  {:>10.4}  {:>10.4}  {:>10.4}",
             curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]

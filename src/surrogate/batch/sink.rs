@@ -3,7 +3,7 @@
 //! peak request says which by its [`Reduction`]: a [`Combination`](Reduction::Combination) of the
 //! modal displacements, or the [`Motion`](Reduction::Motion), whose blocks go to a [`MotionSink`]
 //! that a [`SinkFactory`] builds for each batch (the accelerations and damper forces of
-//! `analysis::motion_peaks`). Also here: how a diverging lane is named.
+//! `analysis::responses::motion_peaks`). Also here: how a diverging lane is named.
 
 use crate::error::Result;
 use crate::simd::Lanes;
