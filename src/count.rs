@@ -3,8 +3,6 @@
 //! request fields that are counts read both with these helpers (`deserialize_with`), and refuse
 //! fractions, negatives and values their type cannot hold with a message that says so.
 
-#![warn(missing_docs)]
-
 use serde::Deserialize;
 use serde::de::{Deserializer, Error, Visitor};
 use std::fmt;

@@ -3,8 +3,6 @@
 //! Bad input names the field at fault so that the command line can print it and the service can put
 //! it in a problem+json `errors[]` entry without parsing strings.
 
-#![warn(missing_docs)]
-
 use serde::{Deserialize, Serialize};
 use std::fmt;
 

@@ -7,8 +7,6 @@
 //! Hand-written: the crates that offer them (argmin, levenberg-marquardt) bring their own matrix
 //! and problem abstractions for what is here a few dozen lines over `Vec<f64>`.
 
-#![warn(missing_docs)]
-
 use crate::error::Result;
 use crate::linalg::{cholesky, cholesky_solve};
 use crate::progress::{Observer, check};

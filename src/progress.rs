@@ -4,8 +4,6 @@
 //! an expansion's fit, sampling) asks it between pieces of work that take well under a second, so a
 //! cancelled job or a server that is shutting down gets its processors back within about a second.
 
-#![warn(missing_docs)]
-
 use crate::error::{Error, Result};
 use serde::{Deserialize, Serialize};
 

@@ -1,8 +1,6 @@
 //! The offline commands: what `windmeta modes`, `simulate`, `sample-peaks`, `calibrate`, `validate`,
 //! `exceedance`, `profile`, `hazard`, `fragility`, `sensitivity`, `demands`, `serviceability`, `sweep` and `bench` do, as functions of their parsed arguments. `main.rs` only parses and dispatches.
 
-#![warn(missing_docs)]
-
 mod args;
 mod bench;
 mod calibrate;

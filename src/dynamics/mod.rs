@@ -1,8 +1,6 @@
 //! The damped building in time: nonlinear viscous dampers and the two reference integrators,
 //! reduced-order (retained modes) and full-order (every floor).
 
-#![warn(missing_docs)]
-
 mod damper;
 mod factored;
 mod full;

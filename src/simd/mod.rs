@@ -15,7 +15,6 @@
 //! elsewhere they become calls, correct but many times slower. This is the only module with
 //! `unsafe` code.
 
-#![warn(missing_docs)]
 #![allow(unsafe_code)]
 
 /// Samples per batch: one AVX-512 register of f64, two AVX2 ones.

@@ -6,8 +6,6 @@
 //! `mass_factor`, `damping_ratio` (shared by all modes), `damper_c1` … `damper_cG` (N·(s/m)^α, one
 //! per damper group from the ground up) and `wind_speed` (m/s at the station, 10 m).
 
-#![warn(missing_docs)]
-
 mod inputs;
 mod presets;
 mod spec;

@@ -1,8 +1,6 @@
 //! PC-NARX metamodels (sections 3.2-3.3): NARX dynamics per retained mode whose coefficients are
 //! sparse polynomial-chaos expansions of the uncertain inputs.
 
-#![warn(missing_docs)]
-
 pub mod batch;
 mod calibrate;
 mod cost;

@@ -1,8 +1,6 @@
 //! Uncertain inputs: marginal distributions, a named input model, Latin hypercube and Monte Carlo
 //! designs, and the isoprobabilistic map to the standard space polynomial chaos is built on.
 
-#![warn(missing_docs)]
-
 mod marginal;
 mod model;
 mod sampling;

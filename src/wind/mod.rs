@@ -3,8 +3,6 @@
 //! floor forces and modal forces — either projected from the full floor field or simulated directly
 //! from the projected cross-spectral matrix Φᵀ S_f Φ (the fast path, equal in law).
 
-#![warn(missing_docs)]
-
 mod histories;
 mod loads;
 mod modal;
