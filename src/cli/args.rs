@@ -93,18 +93,10 @@ impl SamplingArgs {
         Ok(fixed)
     }
 
-    /// The metamodel's input model `inputs` with the wind speed and the `--fix NAME=VALUE`
-    /// assignments held.
-    pub fn held_inputs(&self, inputs: &InputModel) -> Result<InputModel> {
-        let mut inputs = inputs.clone();
-        if let Some(v) = self.wind_speed {
-            inputs = inputs.with_fixed("wind_speed", v)?;
-        }
-        for assignment in &self.fix {
-            let (name, value) = parse_assignment(assignment)?;
-            inputs = inputs.with_fixed(&name, value)?;
-        }
-        Ok(inputs)
+    /// The study's input model with the wind speed and the `--fix NAME=VALUE` assignments held,
+    /// checked as every analysis checks held inputs (errors name `fixed.<input>`).
+    pub fn held_inputs(&self, study: &Study) -> Result<InputModel> {
+        crate::analysis::held_inputs(study, &self.fixed()?)
     }
 }
 

@@ -97,7 +97,7 @@ fn coverage(args: &CalibrateArgs) -> Result<Option<WindCoverage>> {
     let (lower, upper) = text.split_once(':').ok_or_else(bad)?;
     let speed = |s: &str| s.trim().parse::<f64>().map_err(|_| bad());
     let coverage = WindCoverage { lower: speed(lower)?, upper: speed(upper)? };
-    coverage.validate()?;
+    coverage.check()?;
     Ok(Some(coverage))
 }
 

@@ -48,7 +48,7 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
     check_confidence(args.analysis.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.sampling.model)?;
-    let inputs = args.sampling.held_inputs(&study.inputs)?;
+    let inputs = args.sampling.held_inputs(&study)?;
     let kind = ResponseKind::parse(&args.response)?;
     let started = Instant::now();
     let seed = args.analysis.seed;

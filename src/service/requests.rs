@@ -100,7 +100,7 @@ impl CalibrationRequest {
             },
             ..defaults
         };
-        options.validate()?;
+        options.check()?;
         if options.cover_wind_speeds.is_some() {
             design(&study, &options)?; // the range inside the wind speed's support
         }

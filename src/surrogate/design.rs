@@ -60,7 +60,7 @@ pub fn design(study: &Study, options: &CalibrationOptions) -> Result<Design> {
     let Some(coverage) = options.cover_wind_speeds else {
         return Ok(Design { weights: vec![1.0; points.len()], points });
     };
-    coverage.validate()?;
+    coverage.check()?;
     let index = study.inputs.index_of(WIND_SPEED)?;
     let marginal = *study.inputs.marginal(WIND_SPEED)?;
     if matches!(marginal, Marginal::Constant { .. }) {

@@ -194,7 +194,7 @@ impl Default for NarxOptions {
 
 impl NarxOptions {
     /// Refuses options outside their bounds, naming the field.
-    pub fn validate(&self) -> Result<()> {
+    pub fn check(&self) -> Result<()> {
         if !(1..=5).contains(&self.max_degree) {
             return Err(Error::invalid("narx.max_degree", format!("must be between 1 and 5, got {}", self.max_degree)));
         }

@@ -56,7 +56,7 @@ pub const MAX_EXPERIMENTS: usize = 5000;
 
 impl CalibrationOptions {
     /// Refuses options outside their bounds, naming the field.
-    pub fn validate(&self) -> Result<()> {
+    pub fn check(&self) -> Result<()> {
         if !(4..=MAX_EXPERIMENTS).contains(&self.experiments) {
             return Err(Error::invalid(
                 "experiments",
@@ -66,11 +66,11 @@ impl CalibrationOptions {
         if self.selection_experiments == 0 {
             return Err(Error::invalid("selection_experiments", "must be at least 1"));
         }
-        self.narx.validate()?;
+        self.narx.check()?;
         if let Some(coverage) = &self.cover_wind_speeds {
-            coverage.validate()?;
+            coverage.check()?;
         }
-        self.pce.validate()
+        self.pce.check()
     }
 }
 
@@ -92,7 +92,7 @@ const MAX_SPEED: f64 = 150.0;
 
 impl WindCoverage {
     /// Refuses speeds outside (0, 150] m/s or a lower speed not below the upper.
-    pub fn validate(&self) -> Result<()> {
+    pub fn check(&self) -> Result<()> {
         let field = "cover_wind_speeds";
         if !(self.lower.is_finite() && self.upper.is_finite() && self.lower > 0.0 && self.upper <= MAX_SPEED) {
             return Err(Error::invalid(

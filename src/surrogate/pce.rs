@@ -53,7 +53,7 @@ impl Default for PceOptions {
 
 impl PceOptions {
     /// Refuses options outside their bounds, naming the field.
-    pub fn validate(&self) -> Result<()> {
+    pub fn check(&self) -> Result<()> {
         if !(1..=20).contains(&self.max_degree) {
             return Err(Error::invalid("pce.max_degree", format!("must be between 1 and 20, got {}", self.max_degree)));
         }
@@ -241,7 +241,7 @@ impl SparsePce {
         options: &PceOptions,
         observer: &dyn Observer,
     ) -> Result<SparsePce> {
-        options.validate()?;
+        options.check()?;
         let n = targets.len();
         if n < 3 || xi.len() != n || weights.len() != n {
             return Err(Error::invalid("experiments", "a polynomial chaos fit needs at least 3 experiments"));

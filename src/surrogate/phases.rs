@@ -189,7 +189,7 @@ pub struct Planned {
 /// Phase 1: the design, the selection experiments through the reference (in parallel), the
 /// deviations' scales and every mode's structure.
 pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
-    options.validate()?;
+    options.check()?;
     let started = Instant::now();
     let design = design(study, options)?.points;
     let k = design.len();

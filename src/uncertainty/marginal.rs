@@ -79,7 +79,7 @@ fn std_normal() -> Normal {
 
 impl Marginal {
     /// Checks the parameters; `field` names the input in messages.
-    pub fn validate(&self, field: &str) -> Result<()> {
+    pub fn check(&self, field: &str) -> Result<()> {
         match *self {
             Marginal::Normal { mean, sd } => {
                 require_finite(&format!("{field}.mean"), mean)?;
@@ -484,10 +484,10 @@ mod tests {
 
     #[test]
     fn invalid_parameters_name_the_field() {
-        let err = Marginal::Lognormal { mean: -1.0, sd: 1.0 }.validate("inputs.mass_factor").unwrap_err();
+        let err = Marginal::Lognormal { mean: -1.0, sd: 1.0 }.check("inputs.mass_factor").unwrap_err();
         assert!(err.to_string().starts_with("inputs.mass_factor.mean"));
-        let err = Marginal::Uniform { lower: 1.0, upper: 1.0 }.validate("x").unwrap_err();
+        let err = Marginal::Uniform { lower: 1.0, upper: 1.0 }.check("x").unwrap_err();
         assert!(err.to_string().starts_with("x.upper"));
-        assert!(Marginal::Normal { mean: 0.0, sd: f64::NAN }.validate("x").is_err());
+        assert!(Marginal::Normal { mean: 0.0, sd: f64::NAN }.check("x").is_err());
     }
 }

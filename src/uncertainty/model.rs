@@ -29,7 +29,7 @@ impl InputModel {
             if inputs[..k].iter().any(|other| other.name == input.name) {
                 return Err(Error::invalid(format!("inputs.{}", input.name), "appears twice"));
             }
-            input.marginal.validate(&format!("inputs.{}", input.name))?;
+            input.marginal.check(&format!("inputs.{}", input.name))?;
         }
         Ok(InputModel { inputs })
     }
@@ -67,7 +67,7 @@ impl InputModel {
     /// Replaces the marginal of a named input (which must exist).
     pub fn with_marginal(mut self, name: &str, marginal: Marginal) -> Result<Self> {
         let k = self.index_of(name)?;
-        marginal.validate(&format!("inputs.{name}"))?;
+        marginal.check(&format!("inputs.{name}"))?;
         self.inputs[k].marginal = marginal;
         Ok(self)
     }

@@ -25,7 +25,7 @@ impl WindLoads {
     /// The wind model of `structure` at `site`; its lowest floor must lie above the site's
     /// roughness length.
     pub fn new(site: &WindSite, structure: &Structure) -> Result<Self> {
-        site.validate()?;
+        site.check()?;
         if structure.floor_elevations[0] <= site.site_roughness_m {
             return Err(Error::invalid(
                 "floor_elevations_m[0]",

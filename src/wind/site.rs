@@ -83,7 +83,7 @@ impl WindSite {
     }
 
     /// Refuses a site whose parameters are out of range, naming the field.
-    pub fn validate(&self) -> Result<()> {
+    pub fn check(&self) -> Result<()> {
         require_positive("wind.site_roughness_m", self.site_roughness_m)?;
         require_positive("wind.station_roughness_m", self.station_roughness_m)?;
         require_positive("wind.station_height_m", self.station_height_m)?;

@@ -78,7 +78,7 @@ impl ClimateSpec {
     pub fn resolve(&self, field: &str) -> Result<Marginal> {
         let marginal = match self {
             ClimateSpec::Marginal(marginal) => {
-                marginal.validate(field)?;
+                marginal.check(field)?;
                 *marginal
             }
             ClimateSpec::ReturnPeriodSpeeds(ReturnPeriodSpeeds { return_period_speeds }) => {
@@ -136,7 +136,7 @@ impl ClimateCoverage {
         let law = self.climate.resolve(&format!("{field}.climate"))?;
         let one_year = law.upper_quantile(annual_probability_of_period(1.0));
         let coverage = WindCoverage { lower: one_year, upper: law.upper_quantile(p) };
-        coverage.validate()?;
+        coverage.check()?;
         Ok(coverage)
     }
 }
