@@ -12,7 +12,12 @@ use std::fmt;
 #[serde(tag = "kind", rename_all = "snake_case")]
 pub enum Error {
     /// The caller supplied something unusable; `field` names it (`stiffness`, `inputs.wind_speed`, ...).
-    Invalid { field: String, reason: String },
+    Invalid {
+        /// The field at fault, as the request or file names it.
+        field: String,
+        /// What is wrong with it.
+        reason: String,
+    },
     /// The computation itself failed on valid input (a diverging free run, a failed factorisation).
     Numerical(String),
     /// The caller asked the work to stop.
@@ -23,6 +28,7 @@ pub enum Error {
 }
 
 impl Error {
+    /// An [`Error::Invalid`] naming `field` and saying what is wrong with it.
     pub fn invalid(field: impl Into<String>, reason: impl Into<String>) -> Self {
         Error::Invalid { field: field.into(), reason: reason.into() }
     }
@@ -41,6 +47,7 @@ impl fmt::Display for Error {
 
 impl std::error::Error for Error {}
 
+/// The result of every fallible function of the numerical core.
 pub type Result<T> = std::result::Result<T, Error>;
 
 /// Refuses a value that is NaN or infinite.

@@ -11,6 +11,9 @@
 //! On top of it sit the offline commands ([`cli`]) and the HTTP service ([`service`]: axum on
 //! tokio, sqlx), the only module with an async runtime.
 
+// Every public item says what it is: `cargo doc` is built with warnings denied in CI.
+#![warn(missing_docs)]
+
 pub mod analysis;
 #[cfg(feature = "cli")]
 pub mod cli;

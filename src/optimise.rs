@@ -33,9 +33,13 @@ pub enum Stop {
 /// Where a minimisation ended, what the cost was there, after how many iterations, and why.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Minimum {
+    /// The point where it ended.
     pub x: Vec<f64>,
+    /// The cost there.
     pub cost: f64,
+    /// Iterations taken.
     pub iterations: usize,
+    /// Why it stopped.
     pub stop: Stop,
 }
 
@@ -47,8 +51,11 @@ pub const NM_MAX_ITERATIONS_PER_COORDINATE: usize = 200;
 /// The normal equations of a least-squares problem at a point: JᵀJ (row-major, n×n), Jᵀr and the
 /// sum of squared residuals r.
 pub struct NormalEquations {
+    /// JᵀJ, row-major n×n.
     pub jtj: Vec<f64>,
+    /// Jᵀr, one entry per variable.
     pub jtr: Vec<f64>,
+    /// Σ r², the cost.
     pub sum_of_squares: f64,
 }
 

@@ -14,23 +14,33 @@ use serde::{Deserialize, Serialize};
 pub enum Progress {
     /// Experiments through the reference (and, after the structures, their NARX fits).
     Experiments {
+        /// Experiments done.
         done: usize,
+        /// Experiments in all.
         total: usize,
     },
+    /// Structure selection of a mode has begun.
     Structure {
+        /// The mode, 1-based.
         mode: usize,
     },
+    /// The polynomial chaos expansions of a mode have begun.
     Expansion {
+        /// The mode, 1-based.
         mode: usize,
     },
     /// Sampling or validation storms done.
     Samples {
+        /// Storms done.
         done: usize,
+        /// Storms in all.
         total: usize,
     },
     /// A certified answer's storms through both the reference model and the metamodel done.
     ReferenceStorms {
+        /// Storms done.
         done: usize,
+        /// Storms in all.
         total: usize,
     },
 }
@@ -38,7 +48,9 @@ pub enum Progress {
 /// Who watches long work: progress reports, and whether it should stop (cheap enough to ask every
 /// few milliseconds).
 pub trait Observer: Sync {
+    /// Takes a report of where the work is.
     fn progress(&self, progress: Progress);
+    /// Whether the work should stop; never, by default.
     fn cancelled(&self) -> bool {
         false
     }

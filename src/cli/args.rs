@@ -2,11 +2,13 @@
 
 use crate::analysis::{CertifyOptions, Response, ResponseKind};
 use crate::error::{Error, Result};
-use crate::study::{Order, Study, StudySpec};
+use crate::study::{Order, Study, StudySpec, WIND_SPEED};
 use crate::uncertainty::{InputModel, parse_assignment};
 use clap::Args;
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
+/// The study a command runs on: a preset or a spec file, with command-line overrides.
 #[derive(Debug, Clone, Args)]
 pub struct StudyArgs {
     /// Built-in study: frame40 (dampers as printed, N·s/m) or frame40-kn (the same numbers in kN·s/m).
@@ -62,8 +64,10 @@ impl StudyArgs {
 /// A metamodel sampled with some inputs held, as exceedance curves and profiles take it.
 #[derive(Debug, Clone, Args)]
 pub struct SamplingArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
+    /// Storms sampled from the metamodel, one input sample each.
     #[arg(long, default_value_t = 10_000)]
     pub samples: usize,
     /// Hold the mean wind speed (m/s): an answer conditional on it.
@@ -75,18 +79,24 @@ pub struct SamplingArgs {
 }
 
 impl SamplingArgs {
-    /// The metamodel's input model `inputs` with the wind speed and the `--fix NAME=VALUE`
-    /// assignments held.
-    pub fn held_inputs(&self, inputs: &InputModel) -> Result<InputModel> {
-        let mut inputs = inputs.clone();
-        if let Some(v) = self.wind_speed {
-            inputs = inputs.with_fixed("wind_speed", v)?;
+    /// The inputs held by `--wind-speed` and the `--fix NAME=VALUE` assignments, by name, as an
+    /// analysis's options take them; an input held twice is refused.
+    pub fn fixed(&self) -> Result<BTreeMap<String, f64>> {
+        let mut fixed = BTreeMap::new();
+        let wind_speed = self.wind_speed.map(|v| (WIND_SPEED.to_string(), v));
+        let assignments = self.fix.iter().map(|a| parse_assignment(a)).collect::<Result<Vec<_>>>()?;
+        for (name, value) in wind_speed.into_iter().chain(assignments) {
+            if fixed.insert(name.clone(), value).is_some() {
+                return Err(Error::invalid("fix", format!("`{name}` is held twice")));
+            }
         }
-        for assignment in &self.fix {
-            let (name, value) = parse_assignment(assignment)?;
-            inputs = inputs.with_fixed(&name, value)?;
-        }
-        Ok(inputs)
+        Ok(fixed)
+    }
+
+    /// The study's input model with the wind speed and the `--fix NAME=VALUE` assignments held,
+    /// checked as every analysis checks held inputs (errors name `fixed.<input>`).
+    pub fn held_inputs(&self, study: &Study) -> Result<InputModel> {
+        crate::analysis::held_inputs(study, &self.fixed()?)
     }
 }
 
@@ -140,6 +150,7 @@ impl CertifyArgs {
 /// The seed, the band's level and the output of an analysis command.
 #[derive(Debug, Clone, Args)]
 pub struct AnalysisArgs {
+    /// Seed of the input samples and of the storms' wind.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Confidence level of the bands and intervals.

@@ -23,6 +23,7 @@ use clap::Args;
 use serde::Serialize;
 use std::time::Instant;
 
+/// What `windmeta bench` measures and how often.
 #[derive(Debug, Clone, Args)]
 pub struct BenchArgs {
     /// Preset to measure.
@@ -46,6 +47,7 @@ pub struct BenchArgs {
     /// Rows N of the Sobol analysis (N·(groups + 2) storms).
     #[arg(long, default_value_t = 4096)]
     pub sensitivity_samples: usize,
+    /// Print the report as JSON instead of a table.
     #[arg(long)]
     pub json: bool,
 }
@@ -53,20 +55,30 @@ pub struct BenchArgs {
 /// One measured stage.
 #[derive(Debug, Clone, Serialize)]
 pub struct BenchRow {
+    /// What was timed.
     pub stage: String,
+    /// Median wall-clock time of the repetitions (s).
     pub median_seconds: f64,
+    /// Times the stage was run.
     pub repetitions: usize,
 }
 
 /// Everything `windmeta bench` measures.
 #[derive(Debug, Clone, Serialize)]
 pub struct BenchReport {
+    /// The preset measured.
     pub preset: String,
+    /// Storm duration (s).
     pub duration_s: f64,
+    /// The study's time step (s).
     pub time_step_s: f64,
+    /// Threads of rayon's pool, used by the stages run on all threads.
     pub threads: usize,
+    /// Experiments K of the measured calibration.
     pub experiments: usize,
+    /// Samples of the measured exceedance curve.
     pub samples: usize,
+    /// The stages in the order they ran.
     pub rows: Vec<BenchRow>,
     /// Reduced-order reference integration over the metamodel's free run, per sample, same storm,
     /// both on one thread.
@@ -304,6 +316,7 @@ fn per_sample_rows(study: &Study, metamodel: &Metamodel, repetitions: usize) -> 
     })
 }
 
+/// Runs `windmeta bench`: the report as a Markdown table, or as JSON with `--json`.
 pub fn bench(args: &BenchArgs) -> Result<String> {
     let report = bench_report(args)?;
     if args.json {

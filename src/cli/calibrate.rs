@@ -20,13 +20,16 @@ pub enum RefinementChoice {
     None,
 }
 
+/// What `windmeta calibrate` fits and where it writes the metamodel.
 #[derive(Debug, Clone, Args)]
 pub struct CalibrateArgs {
+    /// The study calibrated on.
     #[command(flatten)]
     pub study: StudyArgs,
     /// Experiments K of the Latin-hypercube design.
     #[arg(long, default_value_t = 200)]
     pub experiments: usize,
+    /// Seed of the Latin-hypercube design and of the experiments' storms.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Refinement of the coefficients on the simulation error.
@@ -94,10 +97,11 @@ fn coverage(args: &CalibrateArgs) -> Result<Option<WindCoverage>> {
     let (lower, upper) = text.split_once(':').ok_or_else(bad)?;
     let speed = |s: &str| s.trim().parse::<f64>().map_err(|_| bad());
     let coverage = WindCoverage { lower: speed(lower)?, upper: speed(upper)? };
-    coverage.validate()?;
+    coverage.check()?;
     Ok(Some(coverage))
 }
 
+/// Runs `windmeta calibrate`: fits, writes the metamodel and returns a summary of the fit.
 pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
     let study = args.study.study()?;
     let mut options = CalibrationOptions { experiments: args.experiments, seed: args.seed, ..Default::default() };

@@ -9,8 +9,10 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta demands` samples and where it writes the demand sample.
 #[derive(Debug, Clone, Args)]
 pub struct DemandsArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
     /// The storm speed at 10 m (m/s), inside the metamodel's wind-speed law's support.
@@ -19,6 +21,7 @@ pub struct DemandsArgs {
     /// Storms (rows of the demand sample).
     #[arg(long, default_value_t = 1000)]
     pub samples: usize,
+    /// Seed of the input samples and of the storms' wind.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// The demand sample (CSV); written to standard output when absent.
@@ -26,6 +29,7 @@ pub struct DemandsArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Runs `windmeta demands`: the CSV itself, or a summary when it was written to `--out`.
 pub fn demands(args: &DemandsArgs) -> Result<String> {
     let (metamodel, study) = read_metamodel(&args.model)?;
     let started = Instant::now();

@@ -4,21 +4,25 @@ use super::args::{CertifyArgs, ResponseArgs, SamplingArgs, out_format, write_out
 use super::read_metamodel;
 use super::validate::Counter;
 use crate::analysis::{
-    OnThisMachine, STANDARD_GRAVITY, automatic_thresholds, certify_exceedance, check_confidence,
-    check_reference_storms, exceedance_csv, exceedance_figure, metamodel_peaks,
+    Exceedance, ExceedanceOptions, OnThisMachine, STANDARD_GRAVITY, exceedance_csv, exceedance_figure,
+    metamodel_exceedance,
 };
-use crate::error::{Error, Result};
+use crate::error::Result;
 use clap::Args;
 use serde_json::json;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta exceedance` samples, at which thresholds, and how it is certified.
 #[derive(Debug, Clone, Args)]
 pub struct ExceedanceArgs {
+    /// The metamodel, the storms sampled and the inputs held.
     #[command(flatten)]
     pub sampling: SamplingArgs,
+    /// Seed of the input samples and of the storms' wind.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// The peak response whose curve is computed.
     #[command(flatten)]
     pub response: ResponseArgs,
     /// Thresholds in the response's unit (m, m/s² or N), comma separated; automatic when absent.
@@ -27,6 +31,7 @@ pub struct ExceedanceArgs {
     /// Confidence level of the band.
     #[arg(long, default_value_t = 0.95)]
     pub confidence: f64,
+    /// Whether the curve is certified by reference storms.
     #[command(flatten)]
     pub certify: CertifyArgs,
     /// Write the curve: .csv, .json or .svg by extension.
@@ -34,39 +39,24 @@ pub struct ExceedanceArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Runs `windmeta exceedance`: the curve with its band.
 pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
-    check_confidence(args.confidence)?;
+    let options = ExceedanceOptions {
+        samples: args.sampling.samples,
+        seed: args.seed,
+        fixed: args.sampling.fixed()?,
+        thresholds: args.thresholds.clone(),
+        confidence: args.confidence,
+        profile_quantile: None,
+        certify: args.certify.options(),
+    };
+    options.check()?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.sampling.model)?;
     let response = args.response.response(&study)?;
-    let inputs = args.sampling.held_inputs(&study.inputs)?;
-    if let Some(t) = &args.thresholds
-        && (t.is_empty() || t.iter().any(|x| !x.is_finite()))
-    {
-        return Err(Error::invalid("thresholds", "must be a non-empty list of finite numbers"));
-    }
-    let certify = args.certify.options();
-    if let Some(options) = &certify {
-        check_reference_storms(options.reference_storms, args.sampling.samples, "certify")?;
-    }
     let started = Instant::now();
-    let counter = Counter(started);
-    let peaks = metamodel_peaks(&metamodel, &study, &inputs, args.sampling.samples, args.seed, response, &counter)?;
-    let thresholds = args.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-    let (seed, confidence) = (args.seed, args.confidence);
-    let (curve, certification) = certify_exceedance(
-        &metamodel,
-        &study,
-        &inputs,
-        &peaks,
-        &thresholds,
-        certify.as_ref(),
-        seed,
-        response,
-        confidence,
-        &OnThisMachine,
-        &counter,
-    )?;
+    let Exceedance { curve, certification, .. } =
+        metamodel_exceedance(&metamodel, &study, response, &options, &OnThisMachine, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let what = response.per_storm();
     if let (Some(path), Some(format)) = (&args.out, format) {
@@ -98,8 +88,8 @@ pub fn exceedance(args: &ExceedanceArgs) -> Result<String> {
         out += &format!("  {:>10}  {:>10}", "metamodel", "mismatch");
     }
     out += "\n";
-    let step = (thresholds.len() / 12).max(1);
-    for i in (0..thresholds.len()).step_by(step) {
+    let step = (curve.thresholds.len() / 12).max(1);
+    for i in (0..curve.thresholds.len()).step_by(step) {
         out += &format!(
             "{:>12.5}  {:>10.4}  {:>10.4}  {:>10.4}",
             curve.thresholds[i], curve.probabilities[i], curve.lower[i], curve.upper[i]

@@ -11,8 +11,10 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta fragility` samples: speeds, thresholds, storms per speed.
 #[derive(Debug, Clone, Args)]
 pub struct FragilityArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
     /// Storm speeds (m/s): from:to:step, or a comma-separated list.
@@ -21,11 +23,13 @@ pub struct FragilityArgs {
     /// Thresholds (m), comma separated.
     #[arg(long, value_delimiter = ',', allow_negative_numbers = true, required = true)]
     pub thresholds: Vec<f64>,
+    /// The peak response the thresholds are in.
     #[command(flatten)]
     pub response: ResponseArgs,
     /// Storms at each speed.
     #[arg(long, default_value_t = 500)]
     pub samples: usize,
+    /// Seed, confidence level and JSON output.
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// With --certify N: N storms at each speed through both models.
@@ -57,6 +61,7 @@ pub fn parse_speeds(text: &str) -> Result<Vec<f64>> {
     numbers(',')
 }
 
+/// Runs `windmeta fragility`: the curves and their lognormal fits.
 pub fn fragility(args: &FragilityArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.model)?;

@@ -18,8 +18,10 @@ pub enum SamplingArg {
     MonteCarlo,
 }
 
+/// What `windmeta hazard` samples under which climate, and what it reports.
 #[derive(Debug, Clone, Args)]
 pub struct HazardArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
     /// The law of the annual maximum storm speed, as JSON: a marginal such as
@@ -27,6 +29,7 @@ pub struct HazardArgs {
     /// '{"return_period_speeds": {"50": 32, "700": 40}}'. Default: the metamodel's wind_speed.
     #[arg(long)]
     pub climate: Option<String>,
+    /// The peak response whose annual curve is computed.
     #[command(flatten)]
     pub response: ResponseArgs,
     /// Thresholds (m), comma separated; 50 spread over the sampled peaks when absent.
@@ -39,13 +42,17 @@ pub struct HazardArgs {
     /// A limit (m) whose annual probability and reliability index are reported.
     #[arg(long, allow_negative_numbers = true)]
     pub limit: Option<f64>,
+    /// Storms of the annual analysis.
     #[arg(long, default_value_t = 20_000)]
     pub samples: usize,
+    /// How the storm speeds are drawn: equal numbers per stratum of the climate's tail, or plain
+    /// Monte Carlo.
     #[arg(long, value_enum, default_value = "stratified")]
     pub sampling: SamplingArg,
     /// With --certify N: N storms through both models, shared out over the wind strata.
     #[command(flatten)]
     pub certify: CertifyArgs,
+    /// Seed, confidence level and JSON output.
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the answer: .csv, .json or .svg by extension.
@@ -53,6 +60,7 @@ pub struct HazardArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Runs `windmeta hazard`: the annual curve, return levels and reliability index.
 pub fn hazard(args: &HazardArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.model)?;

@@ -5,8 +5,10 @@ use crate::error::Result;
 use clap::Args;
 use serde_json::json;
 
+/// The study whose modes `windmeta modes` prints, and in which form.
 #[derive(Debug, Clone, Args)]
 pub struct ModesArgs {
+    /// The study whose modes are printed.
     #[command(flatten)]
     pub study: StudyArgs,
     /// Print JSON instead of a table.
@@ -14,6 +16,7 @@ pub struct ModesArgs {
     pub json: bool,
 }
 
+/// Runs `windmeta modes`: a table of the modes, or JSON with `--json`.
 pub fn modes(args: &ModesArgs) -> Result<String> {
     let study = args.study.study()?;
     let modes = &study.modes;

@@ -16,13 +16,16 @@ use std::time::Instant;
 /// More reference storms than this is a job for the metamodel.
 pub const MAX_REFERENCE_SAMPLES: usize = 100_000;
 
+/// What `windmeta sample-peaks` runs through the reference model.
 #[derive(Debug, Clone, Args)]
 pub struct SamplePeaksArgs {
+    /// The study whose reference model is run.
     #[command(flatten)]
     pub study: StudyArgs,
     /// Number of storms (one input sample each).
     #[arg(long, default_value_t = 200)]
     pub samples: usize,
+    /// Seed of the input samples and of the storms' wind.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// Hold every input at its mean; only the wind varies from storm to storm.
@@ -31,14 +34,18 @@ pub struct SamplePeaksArgs {
     /// Integrate every floor instead of the retained modes.
     #[arg(long)]
     pub full_order: bool,
+    /// Wind path of a reduced-order run (a full-order run uses the floor field).
     #[arg(long, value_enum, default_value = "modal")]
     pub wind: WindChoice,
+    /// The peak response recorded per storm.
     #[command(flatten)]
     pub response: ResponseArgs,
+    /// Print every peak with the summary as JSON.
     #[arg(long)]
     pub json: bool,
 }
 
+/// Runs `windmeta sample-peaks`: the peaks' mean, standard deviation and quantiles.
 pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
     if args.samples == 0 || args.samples > MAX_REFERENCE_SAMPLES {
         return Err(Error::invalid(

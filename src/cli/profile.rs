@@ -10,8 +10,10 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta profile` samples and which quantile it profiles.
 #[derive(Debug, Clone, Args)]
 pub struct ProfileArgs {
+    /// The metamodel, the storms sampled and the inputs held.
     #[command(flatten)]
     pub sampling: SamplingArgs,
     /// The response at every floor: displacement, drift, acceleration, damper_force or
@@ -21,6 +23,7 @@ pub struct ProfileArgs {
     /// Probability of the quantile profiled, e.g. 0.9 for the peak one storm in ten exceeds.
     #[arg(long, default_value_t = 0.9, allow_negative_numbers = true)]
     pub quantile: f64,
+    /// Seed, confidence level and JSON output.
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the profile: .csv, .json or .svg by extension.
@@ -39,12 +42,13 @@ fn csv_text(profile: &PeakProfile, unit: &str) -> String {
     out
 }
 
+/// Runs `windmeta profile`: the quantile at every floor with its band.
 pub fn profile(args: &ProfileArgs) -> Result<String> {
     check_quantile(args.quantile)?;
     check_confidence(args.analysis.confidence)?;
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.sampling.model)?;
-    let inputs = args.sampling.held_inputs(&study.inputs)?;
+    let inputs = args.sampling.held_inputs(&study)?;
     let kind = ResponseKind::parse(&args.response)?;
     let started = Instant::now();
     let seed = args.analysis.seed;

@@ -9,19 +9,24 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta sensitivity` samples for the Sobol indices.
 #[derive(Debug, Clone, Args)]
 pub struct SensitivityArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
+    /// The peak response whose variance is apportioned.
     #[command(flatten)]
     pub response: ResponseArgs,
     /// Rows N of each of the two base samples; the analysis runs N·(groups + 2) storms.
     #[arg(long, default_value_t = 4096)]
     pub samples: usize,
+    /// Seed, confidence level and JSON output.
     #[command(flatten)]
     pub analysis: AnalysisArgs,
 }
 
+/// Runs `windmeta sensitivity`: first-order and total indices with their intervals.
 pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
     let (metamodel, study) = read_metamodel(&args.model)?;
     let response = args.response.response(&study)?;

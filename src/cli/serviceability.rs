@@ -13,8 +13,10 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta serviceability` checks, under which climate.
 #[derive(Debug, Clone, Args)]
 pub struct ServiceabilityArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
     /// The law of the annual maximum storm speed, as JSON (as for `hazard`). Default: the
@@ -29,11 +31,13 @@ pub struct ServiceabilityArgs {
     /// "return_period_years", "limit" | "limit_per_storey_height", "floors", "strength"}.
     #[arg(long)]
     pub criteria_file: Option<PathBuf>,
+    /// Storms of the annual analysis.
     #[arg(long, default_value_t = 20_000)]
     pub samples: usize,
     /// With --certify N: each criterion's governing floor certified by N storms through both models.
     #[command(flatten)]
     pub certify: CertifyArgs,
+    /// Seed, confidence level and JSON output.
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the answer: .csv, .json or .svg by extension.
@@ -41,6 +45,7 @@ pub struct ServiceabilityArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Runs `windmeta serviceability`: each criterion's level, band and verdict.
 pub fn serviceability(args: &ServiceabilityArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.model)?;

@@ -18,8 +18,10 @@ pub enum WindChoice {
     Modal,
 }
 
+/// What `windmeta simulate` runs and which histories it writes.
 #[derive(Debug, Clone, Args)]
 pub struct SimulateArgs {
+    /// The study whose reference model is run.
     #[command(flatten)]
     pub study: StudyArgs,
     /// Seed of the wind's random phases.
@@ -43,10 +45,12 @@ pub struct SimulateArgs {
     /// such as 1,20,40; the roof when absent.
     #[arg(long, value_name = "all|F1,F2,...")]
     pub history_floors: Option<String>,
+    /// Print the inputs, every floor's peaks and the timings as JSON.
     #[arg(long)]
     pub json: bool,
 }
 
+/// Runs `windmeta simulate`: one storm at the inputs' means (or fixed values) and its peaks.
 pub fn simulate(args: &SimulateArgs) -> Result<String> {
     let started = Instant::now();
     let study = args.study.study()?;

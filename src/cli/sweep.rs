@@ -10,8 +10,10 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta sweep` holds, at which values, and which level it reports.
 #[derive(Debug, Clone, Args)]
 pub struct SweepArgs {
+    /// The metamodel (JSON from `windmeta calibrate`).
     #[arg(long)]
     pub model: PathBuf,
     /// The input held at each value, e.g. damper_c4 (a random input other than wind_speed).
@@ -27,6 +29,7 @@ pub struct SweepArgs {
     /// The return period (years) whose level is reported.
     #[arg(long, default_value_t = 10.0)]
     pub return_period: f64,
+    /// The peak response whose level is reported.
     #[command(flatten)]
     pub response: ResponseArgs,
     /// Storms at each value (the same storms at every value).
@@ -35,6 +38,7 @@ pub struct SweepArgs {
     /// A limit (SI) drawn on the SVG.
     #[arg(long)]
     pub limit: Option<f64>,
+    /// Seed, confidence level and JSON output.
     #[command(flatten)]
     pub analysis: AnalysisArgs,
     /// Write the answer: .csv, .json or .svg by extension.
@@ -42,6 +46,7 @@ pub struct SweepArgs {
     pub out: Option<PathBuf>,
 }
 
+/// Runs `windmeta sweep`: the T-year level at each value, with its band.
 pub fn sweep(args: &SweepArgs) -> Result<String> {
     let format = out_format(args.out.as_deref(), &["csv", "json", "svg"])?;
     let (metamodel, study) = read_metamodel(&args.model)?;

@@ -9,6 +9,7 @@ use clap::Args;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// What `windmeta validate` compares.
 #[derive(Debug, Clone, Args)]
 pub struct ValidateArgs {
     /// The metamodel (JSON from `windmeta calibrate`).
@@ -17,6 +18,7 @@ pub struct ValidateArgs {
     /// Fresh Monte Carlo samples, each one storm through both models.
     #[arg(long, default_value_t = 200)]
     pub samples: usize,
+    /// Seed of the fresh samples and of their storms' wind.
     #[arg(long, default_value_t = 1000)]
     pub seed: u64,
     /// Hold an input at a value, e.g. --fix wind_speed=60 to validate at the end of a calibrated
@@ -49,6 +51,7 @@ impl Observer for Counter {
     }
 }
 
+/// Runs `windmeta validate`: the metamodel's peaks and curves against the reference's.
 pub fn validate(args: &ValidateArgs) -> Result<String> {
     let (metamodel, study) = read_metamodel(&args.model)?;
     let mut inputs = study.inputs.clone();

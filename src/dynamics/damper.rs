@@ -74,10 +74,12 @@ impl Dampers {
         Ok(Dampers { coefficients, exponent, floor_weights })
     }
 
+    /// Number of dampers.
     pub fn len(&self) -> usize {
         self.coefficients.len()
     }
 
+    /// Whether the structure has no dampers.
     pub fn is_empty(&self) -> bool {
         self.coefficients.is_empty()
     }
@@ -129,6 +131,8 @@ pub struct ImplicitDamperSolve {
 }
 
 impl ImplicitDamperSolve {
+    /// A solver for W⁻¹ = `w_inverse` (row-major, size×size) and the damper velocities G = `map`
+    /// (per damper, (index, weight) pairs), with the coefficients and exponent of `dampers`.
     pub fn new(w_inverse: Vec<f64>, map: Vec<Vec<(usize, f64)>>, dampers: &Dampers) -> Self {
         let size = (w_inverse.len() as f64).sqrt().round() as usize;
         let dampers_count = dampers.len();

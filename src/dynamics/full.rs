@@ -17,17 +17,24 @@ use crate::wind::FloorForces;
 /// history is differenced.
 #[derive(Debug, Clone)]
 pub struct FloorResponse {
+    /// Floor displacements (m).
     pub displacements: Vec<Vec<f64>>,
+    /// Floor velocities (m/s).
     pub velocities: Vec<Vec<f64>>,
+    /// Floor accelerations (m/s²).
     pub accelerations: Vec<Vec<f64>>,
 }
 
 /// M, C and K of one sample, row-major.
 #[derive(Debug, Clone)]
 pub struct FullSystem {
+    /// Degrees of freedom n, one per floor.
     pub size: usize,
+    /// Mass matrix M (kg), n×n.
     pub mass: Vec<f64>,
+    /// Damping matrix C (N·s/m), n×n.
     pub damping: Vec<f64>,
+    /// Stiffness matrix K (N/m), n×n.
     pub stiffness: Vec<f64>,
 }
 

@@ -18,7 +18,9 @@ use crate::wind::ModalForces;
 /// Σ_m y_m is the roof displacement), and the integrator's velocities ẏ_m(t).
 #[derive(Debug, Clone)]
 pub struct ModalResponse {
+    /// Modal displacements y_m (m), `[mode][step]`.
     pub displacements: Vec<Vec<f64>>,
+    /// Modal velocities ẏ_m (m/s), `[mode][step]`.
     pub velocities: Vec<Vec<f64>>,
 }
 
@@ -29,7 +31,7 @@ impl ModalResponse {
         (0..steps).map(|i| self.displacements.iter().map(|y| y[i]).sum()).collect()
     }
 
-    /// The motion, as the responses of [`super::motion`] take it.
+    /// The motion, as the floor accelerations and damper forces are computed from it.
     pub fn motion(self) -> ModalMotion {
         ModalMotion { displacements: self.displacements, velocities: self.velocities }
     }

@@ -20,7 +20,9 @@ use crate::wind::ModalForces;
 /// Modal displacements and velocities, `[mode][step]`.
 #[derive(Debug, Clone)]
 pub struct ModalMotion {
+    /// Modal displacements y_m (m).
     pub displacements: Vec<Vec<f64>>,
+    /// Modal velocities ẏ_m (m/s).
     pub velocities: Vec<Vec<f64>>,
 }
 
@@ -59,11 +61,13 @@ pub struct SampleModel<'a> {
 }
 
 impl<'a> SampleModel<'a> {
+    /// The reduced model of a sample: its scaled modes, its damping ratio and its dampers.
     pub fn new(modes: &'a Modes, damping_ratio: f64, dampers: &'a Dampers) -> Self {
         let map = dampers.modal_map(modes.shapes.as_ref());
         SampleModel { modes, damping_ratio, dampers, map }
     }
 
+    /// Number of dampers.
     pub fn dampers(&self) -> usize {
         self.map.len()
     }

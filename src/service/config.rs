@@ -23,6 +23,8 @@ pub enum Role {
     Worker,
 }
 
+/// The settings of `windmeta serve`: what it listens on and stores in, what it does, and the
+/// bounds on every request's and job's cost.
 #[derive(Debug, Clone, Args)]
 pub struct ServeArgs {
     /// Address to listen on (port 0: any free port).

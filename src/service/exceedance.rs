@@ -1,24 +1,20 @@
-//! Exceedance requests: what a client asks, how it is checked, the sampling that answers it
+//! Exceedance requests: what a client asks, how it is checked (the server's bounds here, the rest by
+//! the analysis's [`ExceedanceOptions`]), the options it converts into for [`metamodel_exceedance`]
 //! (shared by the synchronous route and the worker that runs large requests as operations), and
 //! the answer in each of its renderings.
 
 use super::ServeArgs;
 use super::rendering::Rendering;
 use super::schema::{fixed_inputs_schema, thresholds_schema};
-use crate::analysis::ExceedanceCurve;
-use crate::analysis::exceedance_figure;
 use crate::analysis::{
-    Certification, CertifyOptions, PeakProfile, ReferenceRunner, Response, ResponseKind, ResponseName,
-    automatic_thresholds, certify_exceedance, check_confidence, check_quantile, check_reference_storms,
-    check_thresholds, exceedance_csv, metamodel_peaks, metamodel_profiles,
+    Certification, CertifyOptions, Exceedance, ExceedanceCurve, ExceedanceOptions, PeakProfile, ReferenceRunner,
+    Response, ResponseKind, ResponseName, exceedance_csv, exceedance_figure, metamodel_exceedance,
 };
-use crate::error::{Error, Result, require_finite};
+use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::structure::MAX_FLOORS;
 use crate::study::Study;
 use crate::surrogate::Metamodel;
-use crate::uncertainty::InputModel;
-use crate::wind::WindLoads;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use utoipa::ToSchema;
@@ -84,30 +80,33 @@ impl Default for ExceedanceRequest {
 }
 
 impl ExceedanceRequest {
-    /// The checks that need no metamodel; errors name the field.
+    /// The analysis's options.
+    pub fn options(&self) -> ExceedanceOptions {
+        ExceedanceOptions {
+            samples: self.samples,
+            seed: self.seed,
+            fixed: self.fixed.clone(),
+            thresholds: self.thresholds.clone(),
+            confidence: self.confidence,
+            profile_quantile: self.profile_quantile,
+            certify: self.certify,
+        }
+    }
+
+    /// The checks that need no metamodel: the server's bounds, the floor's, and the options';
+    /// errors name the field.
     pub fn check(&self, config: &ServeArgs) -> Result<()> {
         if self.samples == 0 || self.samples > config.max_samples {
             return Err(Error::invalid("samples", format!("must be between 1 and {}", config.max_samples)));
         }
-        check_confidence(self.confidence)?;
-        if let Some(p) = self.profile_quantile {
-            check_quantile(p).map_err(|_| {
-                Error::invalid("profile_quantile", format!("must lie strictly between 0 and 1, got {p}"))
-            })?;
-        }
-        if let Some(thresholds) = &self.thresholds {
-            check_thresholds(thresholds)?;
-        }
+        self.options().check()?;
         if let Some(floor) = self.floor
             && !(1..=MAX_FLOORS).contains(&floor)
         {
             return Err(Error::invalid("floor", format!("must be between 1 and {MAX_FLOORS}, got {floor}")));
         }
-        for (name, value) in &self.fixed {
-            require_finite(&format!("fixed.{name}"), *value)?;
-        }
         if let Some(certify) = &self.certify {
-            check_certify(certify, self.samples, config)?;
+            check_reference_storm_budget(certify.reference_storms, config)?;
         }
         Ok(())
     }
@@ -116,7 +115,7 @@ impl ExceedanceRequest {
     /// inputs' names and supports), so that a request queued as an operation cannot fail on them.
     pub fn check_against(&self, study: &Study) -> Result<()> {
         self.response.located(self.floor, self.group, &study.structure)?;
-        held_inputs(study, &self.fixed).map(drop)
+        self.options().inputs(study).map(drop)
     }
 
     /// Samples the metamodel and builds the curve (blocking; parallel over samples); a certified
@@ -130,49 +129,11 @@ impl ExceedanceRequest {
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
         let response = self.response.located(self.floor, self.group, &study.structure)?;
-        let inputs = held_inputs(study, &self.fixed)?;
-        let (peaks, profile) = match self.profile_quantile {
-            None => (metamodel_peaks(metamodel, study, &inputs, self.samples, self.seed, response, observer)?, None),
-            Some(p) => {
-                let (samples, seed) = (self.samples, self.seed);
-                let all = metamodel_profiles(metamodel, study, &inputs, samples, seed, response.kind(), observer)?;
-                let columns: Vec<usize> = response
-                    .members(&study.structure)?
-                    .iter()
-                    .map(|m| {
-                        all.responses.iter().position(|r| r == m).expect("every floor with the response is profiled")
-                    })
-                    .collect();
-                let profile = all.quantile_profile(p, self.confidence)?;
-                let largest = |peaks: &Vec<f64>| columns.iter().fold(0.0, |m: f64, &c| m.max(peaks[c]));
-                (all.peaks.iter().map(largest).collect(), Some(profile))
-            }
-        };
-        let thresholds = self.thresholds.clone().unwrap_or_else(|| automatic_thresholds(&peaks, 50));
-        let (seed, confidence, certify) = (self.seed, self.confidence, self.certify.as_ref());
-        let (curve, certification) = certify_exceedance(
-            metamodel,
-            study,
-            &inputs,
-            &peaks,
-            &thresholds,
-            certify,
-            seed,
-            response,
-            confidence,
-            reference,
-            observer,
-        )?;
+        let Exceedance { curve, certification, profile } =
+            metamodel_exceedance(metamodel, study, response, &self.options(), reference, observer)?;
         let metamodel_id = metamodel_id.to_string();
         Ok(ExceedanceAnswer { curve, response, profile, certification, metamodel_id })
     }
-}
-
-/// Errs, naming the field, unless a certification's reference storms are within the contract's
-/// and the server's bounds and no more than the request's metamodel storms.
-fn check_certify(certify: &CertifyOptions, samples: usize, config: &ServeArgs) -> Result<()> {
-    check_reference_storms(certify.reference_storms, samples, "certify.reference_storms")?;
-    check_reference_storm_budget(certify.reference_storms, config)
 }
 
 /// Errs, naming the field, when a request runs more reference storms in all than the server's
@@ -188,19 +149,6 @@ pub fn check_reference_storm_budget(storms: usize, config: &ServeArgs) -> Result
         ));
     }
     Ok(())
-}
-
-/// The study's input model with the `fixed` inputs held; errors name `fixed.<input>`.
-pub fn held_inputs(study: &Study, fixed: &BTreeMap<String, f64>) -> Result<InputModel> {
-    let mut inputs = study.inputs.clone();
-    for (name, value) in fixed {
-        let speed = if name == "wind_speed" { WindLoads::check_speed(*value) } else { Ok(()) };
-        inputs = speed.and_then(|()| inputs.with_fixed(name, *value)).map_err(|error| match error {
-            Error::Invalid { reason, .. } => Error::invalid(format!("fixed.{name}"), reason),
-            other => other,
-        })?;
-    }
-    Ok(inputs)
 }
 
 /// An exceedance curve of a metamodel's sampled peaks, with its band.

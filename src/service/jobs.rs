@@ -9,14 +9,13 @@
 //! storms the same way ([`ReferenceTasks`]). Idle workers of any replica take tasks before new
 //! jobs. The rest of a job runs whole on the worker that claimed it.
 
-use super::exceedance::held_inputs;
 use super::lease::LeaseKeeper;
 use super::store::Store;
 use super::supervision::{Supervision, blocking, through_faults};
 use super::tasks::{EXPERIMENTS_PER_TASK, Experiments, ReferenceTasks, TaskRequest, run_task, work_through_tasks};
 use super::work::Job;
 use super::{AppState, CalibrationRequest};
-use crate::analysis::validate;
+use crate::analysis::{held_inputs, validate};
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, Silent};
 use crate::study::Study;

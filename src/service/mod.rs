@@ -87,6 +87,7 @@ impl Application {
         Ok(Application { listener, state })
     }
 
+    /// The address bound, with the port the system chose when the settings asked for port 0.
     pub fn local_addr(&self) -> SocketAddr {
         self.listener.local_addr().expect("a bound listener has an address")
     }

@@ -26,6 +26,7 @@ pub struct CalibrationRequest {
     /// `damping_ratio`, `damper_c1` … `damper_c4`, `wind_speed`).
     #[schema(schema_with = schema::marginals_schema)]
     pub inputs: BTreeMap<String, Marginal>,
+    /// The wind site (terrain, profile, spectrum) replacing the preset's.
     pub wind: Option<WindSite>,
     /// Exponent α of the nonlinear viscous dampers, F = c·|v|^α·sign(v).
     #[schema(exclusive_minimum = 0, maximum = 2)]
@@ -46,10 +47,14 @@ pub struct CalibrationRequest {
     #[schema(minimum = 4, maximum = 5000)]
     #[serde(default, deserialize_with = "crate::count::optional_count")]
     pub experiments: Option<usize>,
+    /// Seed of the design and of the experiments' storms (1 by default).
     #[serde(default, deserialize_with = "crate::count::optional_seed")]
     pub seed: Option<u64>,
+    /// The NARX dictionary (degrees, lags, coupling, damper terms).
     pub narx: Option<crate::surrogate::narx::NarxOptions>,
+    /// The polynomial chaos expansions of the coefficients (degrees, truncation, interactions).
     pub pce: Option<crate::surrogate::pce::PceOptions>,
+    /// How each experiment's coefficients are refined on the simulation error.
     pub refinement: Option<Refinement>,
     /// Wind speeds (m/s) the design must cover beyond the input model's spread: half the
     /// experiments spread evenly over them, the fits weighted so the expansions stay the input
@@ -95,7 +100,7 @@ impl CalibrationRequest {
             },
             ..defaults
         };
-        options.validate()?;
+        options.check()?;
         if options.cover_wind_speeds.is_some() {
             design(&study, &options)?; // the range inside the wind speed's support
         }
@@ -116,6 +121,7 @@ pub struct ValidationRequest {
     #[schema(minimum = 2, maximum = 5000, default = 200)]
     #[serde(deserialize_with = "crate::count::count")]
     pub samples: usize,
+    /// Seed of the fresh samples and their storms.
     #[schema(default = 1000)]
     #[serde(deserialize_with = "crate::count::seed")]
     pub seed: u64,
@@ -133,9 +139,13 @@ impl Default for ValidationRequest {
 /// A validation as queued: the request and the metamodel it is about.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ValidationJob {
+    /// The stored metamodel validated.
     pub metamodel_id: String,
+    /// Fresh samples, each one reference storm.
     pub samples: usize,
+    /// Seed of the samples and their storms.
     pub seed: u64,
+    /// Inputs held, by name.
     #[serde(default)]
     pub fixed: BTreeMap<String, f64>,
 }

@@ -26,6 +26,7 @@ pub type Lanes = [f64; LANES];
 /// Work written once over the vector type: [`run_widest`] runs it on the widest vectors the
 /// processor has, compiled for their instructions.
 pub trait Kernel {
+    /// What the work returns.
     type Output;
     /// Everything this calls in its loops must be `#[inline(always)]`, so that it is compiled for
     /// V's instructions too (a function that is not inlined keeps the baseline code, and a vector
@@ -70,12 +71,17 @@ unsafe fn on_avx2<K: Kernel>(kernel: K, isa: Avx2Isa) -> K::Output {
 pub trait Vector: Copy {
     /// Proof that the instructions the type uses exist here; values are made only from it.
     type Isa: Copy;
+    /// `x` in every lane.
     fn splat(isa: Self::Isa, x: f64) -> Self;
+    /// The eight values of `x`.
     fn load(isa: Self::Isa, x: &Lanes) -> Self;
+    /// Writes the lanes to `to`.
     fn store(self, to: &mut Lanes);
     /// self·b + c, rounded once.
     fn mul_add(self, b: Self, c: Self) -> Self;
+    /// Product self·b, lane by lane.
     fn mul(self, b: Self) -> Self;
+    /// Absolute value, lane by lane.
     fn abs(self) -> Self;
     /// The larger of the two; where either is NaN, `b` (the x86 rule, one instruction).
     fn max(self, b: Self) -> Self;

@@ -55,6 +55,7 @@ pub struct CustomStructure {
     #[serde(default = "default_modulus")]
     #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0))]
     pub reference_youngs_modulus: f64,
+    /// The dampers, none by default; at most 800.
     #[serde(default)]
     #[cfg_attr(feature = "openapi", schema(max_items = 800))]
     pub dampers: Vec<CustomDamper>,
@@ -78,6 +79,7 @@ fn to_matrix(field: &str, rows: &[Vec<f64>]) -> Result<Mat<f64>> {
 }
 
 impl CustomStructure {
+    /// Checks the matrices, the floor geometry and the dampers, and builds the [`Structure`].
     pub fn build(&self) -> Result<Structure> {
         for (field, count) in [
             ("mass", self.mass.len()),

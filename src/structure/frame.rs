@@ -13,6 +13,7 @@ use faer::{Mat, Side};
 /// The members of one storey: the columns below a floor and the beams of that floor.
 #[derive(Debug, Clone, Copy)]
 pub struct StoreySections {
+    /// The beams of the floor.
     pub beam: Section,
     /// The two outer column lines.
     pub exterior_column: Section,
@@ -23,15 +24,20 @@ pub struct StoreySections {
 /// Geometry, material and loads of a regular plane frame with one diagonal damper per storey.
 #[derive(Debug, Clone)]
 pub struct FrameSpec {
+    /// Width of each bay (m), left to right.
     pub bay_widths: Vec<f64>,
     /// Storey heights from the ground up (m); storey j lies below floor j.
     pub storey_heights: Vec<f64>,
+    /// The members of each storey, from the ground up.
     pub storeys: Vec<StoreySections>,
+    /// Young's modulus of the steel (Pa).
     pub youngs_modulus: f64,
+    /// Density of the steel (kg/m³): the members' own mass.
     pub steel_density: f64,
     /// Dead load carried by a floor per metre of floor length and per metre of the storey height
     /// below it (N/m²): the paper's q₀ = 11.96·h_j kN/m.
     pub dead_load_per_storey_height: f64,
+    /// Acceleration of gravity (m/s²), which turns the dead load into floor mass.
     pub gravity: f64,
     /// Façade width exposed to the wind (m).
     pub wind_width: f64,

@@ -93,6 +93,7 @@ impl Structure {
         Ok(Structure { stiffness, mass, floor_elevations, floor_widths, reference_youngs_modulus, dampers })
     }
 
+    /// Number of floors: the lateral degrees of freedom.
     pub fn floors(&self) -> usize {
         self.floor_elevations.len()
     }

@@ -105,6 +105,7 @@ impl Modes {
         Ok(Modes { frequencies, shapes, modal_masses })
     }
 
+    /// Number of modes.
     pub fn count(&self) -> usize {
         self.frequencies.len()
     }
@@ -120,6 +121,7 @@ impl Modes {
         }
     }
 
+    /// Natural periods T_m = 2π/ω_m (s).
     pub fn periods(&self) -> Vec<f64> {
         self.frequencies.iter().map(|w| 2.0 * std::f64::consts::PI / w).collect()
     }

@@ -8,10 +8,15 @@ use crate::uncertainty::{Input, InputModel, Marginal};
 /// The physical values of one sample of the inputs.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PhysicalParameters {
+    /// Young's modulus E (Pa).
     pub youngs_modulus: f64,
+    /// Factor μ on the mass matrix.
     pub mass_factor: f64,
+    /// Modal damping ratio ζ, the same for every mode.
     pub damping_ratio: f64,
+    /// Coefficient of each damper group (N·(s/m)^α), from the ground up.
     pub damper_coefficients: Vec<f64>,
+    /// Mean wind speed at the 10 m station (m/s).
     pub wind_speed: f64,
 }
 

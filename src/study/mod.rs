@@ -26,19 +26,26 @@ use inputs::{check_admissible, default_inputs};
 /// A validated study.
 #[derive(Debug, Clone)]
 pub struct Study {
+    /// The preset's name, `custom`, or the preset's name with `+custom` when a custom structure
+    /// replaces its own.
     pub name: String,
     /// The spec it was built from (inputs and storm as given, before later changes).
     spec: StudySpec,
+    /// The building at the reference Young's modulus.
     pub structure: Structure,
     /// The retained modes at the reference stiffness and unit mass factor.
     pub modes: Modes,
     /// All N modes, for the classical damping of the full-order model.
     pub all_modes: Modes,
+    /// The uncertain inputs, by name.
     pub inputs: InputModel,
+    /// The wind loads of the site on this structure.
     pub wind: WindLoads,
     /// The modal-force fast path for `modes`, its spectral table built once.
     pub modal_wind: ModalWind,
+    /// Exponent α of the damper law.
     pub damper_exponent: f64,
+    /// Duration and time step of every storm.
     pub storm: StormGrid,
 }
 
@@ -52,6 +59,7 @@ impl Study {
         Study::from_spec(&StudySpec { preset: Some(name.to_string()), ..Default::default() })
     }
 
+    /// Builds and checks the study a spec describes, with the paper's values where it says nothing.
     pub fn from_spec(spec: &StudySpec) -> Result<Study> {
         let (name, structure, damper_scale) = presets::resolve(spec)?;
         let mut inputs = default_inputs(&structure, damper_scale);
@@ -148,6 +156,7 @@ impl Study {
         self.modes.scaled(self.stiffness_factor(p), p.mass_factor)
     }
 
+    /// The dampers of a sample, with its coefficients.
     pub fn dampers(&self, p: &PhysicalParameters) -> Result<Dampers> {
         Dampers::new(&self.structure, &p.damper_coefficients, self.damper_exponent)
     }

@@ -18,6 +18,7 @@ pub struct StudySpec {
     pub structure: Option<CustomStructure>,
     /// Marginals that replace the defaults, by input name.
     pub inputs: BTreeMap<String, Marginal>,
+    /// The wind site; the paper's when absent.
     pub wind: Option<WindSite>,
     /// Exponent α of the damper law (0.38 in the paper).
     pub damper_exponent: Option<f64>,

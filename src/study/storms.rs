@@ -26,7 +26,9 @@ pub enum WindPath {
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(rename_all = "snake_case")]
 pub enum Order {
+    /// The retained modes' equations (exponential integrator).
     Reduced,
+    /// Every floor's equation (Newmark).
     Full,
 }
 
@@ -42,7 +44,9 @@ pub struct StormRun {
     pub modal_motion: Option<ModalMotion>,
     /// Every floor's motion in a full-order run.
     pub floor_motion: Option<FloorResponse>,
+    /// Time spent generating the wind (s).
     pub wind_seconds: f64,
+    /// Time spent integrating (s).
     pub integration_seconds: f64,
 }
 

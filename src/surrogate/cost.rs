@@ -26,6 +26,7 @@ pub struct CalibrationCost {
     /// Estimated peak memory (bytes), overhead included, and the request field that drives most
     /// of it, so that a refusal can name what to change.
     pub memory_bytes: f64,
+    /// The request field that drives most of the memory.
     pub memory_driver: &'static str,
     /// Storm steps integrated by the reference model: experiments × steps per storm.
     pub storm_steps: f64,

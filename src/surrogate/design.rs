@@ -47,7 +47,9 @@ impl WindCoverage {
 /// The experiments' physical inputs and the weights of their least-squares fits (mean 1).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Design {
+    /// Physical inputs of each experiment, in the input model's order.
     pub points: Vec<Vec<f64>>,
+    /// Weight of each experiment in the least-squares fits (mean 1).
     pub weights: Vec<f64>,
 }
 
@@ -58,7 +60,7 @@ pub fn design(study: &Study, options: &CalibrationOptions) -> Result<Design> {
     let Some(coverage) = options.cover_wind_speeds else {
         return Ok(Design { weights: vec![1.0; points.len()], points });
     };
-    coverage.validate()?;
+    coverage.check()?;
     let index = study.inputs.index_of(WIND_SPEED)?;
     let marginal = *study.inputs.marginal(WIND_SPEED)?;
     if matches!(marginal, Marginal::Constant { .. }) {

@@ -18,8 +18,11 @@ use std::sync::Arc;
 /// coupling terms every mode's output (shared, not copied).
 #[derive(Debug, Clone)]
 pub struct Record {
+    /// The output: the modal displacement about its value at rest, over the output scale.
     pub y: Arc<[f64]>,
+    /// The input: the modal force about its mean, over the input scale.
     pub q: Arc<[f64]>,
+    /// The input at rest, before t = 0.
     pub q_rest: f64,
     /// Every retained mode's output by mode index (the own one included); empty without coupling.
     pub outputs: Vec<Arc<[f64]>>,
@@ -167,6 +170,7 @@ pub struct CompressedRegression {
 }
 
 impl CompressedRegression {
+    /// Compresses the one-step regression of `record` on every term of `dictionary`.
     pub fn new(dictionary: &[NarxTerm], record: &Record) -> Result<CompressedRegression> {
         let design = design_with_target(dictionary, record)?;
         let r = design.qr().thin_R().to_owned();
@@ -209,6 +213,7 @@ pub fn simulation_error(terms: &[NarxTerm], theta: &[f64], record: &Record) -> f
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct StructureChoice {
+    /// The chosen terms.
     pub terms: Vec<NarxTerm>,
     /// Mean free-run relative error of the one-step fits of the chosen structure.
     pub error: f64,
@@ -224,7 +229,7 @@ const PARSIMONY_FACTOR: f64 = 1.1;
 /// a path of growing active sets; every prefix (with the constant) is a candidate; each candidate is
 /// fitted by one-step least squares on the `evaluation` records and scored by its mean free-run
 /// error; a candidate that diverges on any of them is rejected. The smallest candidate within
-/// [`PARSIMONY_FACTOR`] of the best is then pruned by backward elimination. The dictionary's damper
+/// `PARSIMONY_FACTOR` of the best is then pruned by backward elimination. The dictionary's damper
 /// terms then enter one at a time, each the one that lowers the free-run error most, while that
 /// lowers it by more than the same factor: they do not go through LARS, whose one-step fit takes
 /// the law of the velocity for the second lag it nearly is and builds paths whose free runs diverge.

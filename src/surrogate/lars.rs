@@ -10,7 +10,9 @@ use crate::linalg::{cholesky, cholesky_solve};
 /// One LARS step: the active set after it (in order of entry) and the coefficients of all columns.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LarsStep {
+    /// Columns in the active set, in order of entry.
     pub active: Vec<usize>,
+    /// Coefficient of every column, zero outside the active set.
     pub coefficients: Vec<f64>,
 }
 

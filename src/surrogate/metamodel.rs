@@ -29,6 +29,7 @@ pub struct ModeModel {
     /// The NARX works on deviations from the static state, (y − y_static) / output_scale and
     /// (Q − Q̄) / input_scale (m and N), at rest at 0 before the storm.
     pub output_scale: f64,
+    /// Scale of the NARX's input deviation Q − Q̄ (N).
     pub input_scale: f64,
     /// The static modal displacement under the mean wind load.
     pub static_response: StaticResponse,
@@ -46,10 +47,13 @@ pub struct StaticResponse {
     /// sample's own mean modal force, which carries the wind speed exactly; when false (some
     /// experiment had Q̄ ≈ 0) it is of y_static itself (m).
     pub per_unit_mean_load: bool,
+    /// Expansion of the static gain or level over the standard-space inputs.
     pub expansion: SparsePce,
 }
 
 impl StaticResponse {
+    /// The static modal displacement (m) at the standard-space point `xi` under the mean modal
+    /// force `mean_load` (N).
     pub fn evaluate(&self, xi: &[f64], mean_load: f64) -> f64 {
         let value = self.expansion.evaluate(xi);
         if self.per_unit_mean_load { value * mean_load } else { value }
@@ -60,9 +64,11 @@ impl StaticResponse {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ModalBasis {
+    /// Natural circular frequency of each mode (rad/s).
     pub frequencies_rad_s: Vec<f64>,
+    /// Generalized mass of each mode (kg).
     pub modal_masses_kg: Vec<f64>,
-    /// shapes[mode][floor].
+    /// `shapes[mode][floor]`.
     pub shapes: Vec<Vec<f64>>,
 }
 
@@ -70,8 +76,11 @@ pub struct ModalBasis {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct ModeDiagnostics {
+    /// The mode, 1-based.
     pub mode: usize,
+    /// The chosen NARX terms, written out.
     pub selected_terms: Vec<String>,
+    /// Distinct candidate structures the selection evaluated.
     pub candidate_structures: usize,
     /// Mean free-run relative error of the one-step fits of the chosen structure (selection set).
     pub structure_error: f64,
@@ -97,7 +106,9 @@ pub struct ModeDiagnostics {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct CalibrationSummary {
+    /// The options the metamodel was calibrated with.
     pub options: CalibrationOptions,
+    /// What the calibration measured about each mode.
     pub modes: Vec<ModeDiagnostics>,
     /// Mean over modes of the NARX-only calibration mean relative error.
     pub narx_mean_relative_error: f64,
@@ -120,6 +131,7 @@ pub struct StageSeconds {
     pub coefficients: f64,
     /// Polynomial chaos expansions and diagnostics.
     pub expansion: f64,
+    /// The calibration end to end.
     pub total: f64,
 }
 
@@ -148,16 +160,21 @@ pub type Germ = Vec<(f64, Vec<f64>)>;
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct Metamodel {
+    /// Always `windmeta-pc-narx`: what the file is.
     pub format: String,
+    /// Version of the file format; files of every version since 1 are read.
     pub version: u32,
     /// The study, fully resolved: rebuilding it gives the same inputs, modes, wind and storm grid.
     #[serde(alias = "problem")]
     pub study: StudySpec,
+    /// The modes the metamodel was calibrated on.
     pub modes: ModalBasis,
+    /// One model per retained mode, in mode order.
     pub models: Vec<ModeModel>,
     /// The law of the models' velocity terms; absent where they have none.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub damper_law: Option<DamperLaw>,
+    /// How the metamodel was calibrated and how well it fits its experiments.
     pub calibration: CalibrationSummary,
     /// Where the wind speed's expansions are continued below the design, found once (see
     /// [`Metamodel::germ`]); `None` where the study has no random wind speed.

@@ -16,9 +16,13 @@ use std::fmt;
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize)]
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 pub struct NarxTerm {
+    /// Lag of the output factor (steps).
     pub output_lag: usize,
+    /// Power of the output factor; 0 leaves it out.
     pub output_power: u32,
+    /// Lag of the input factor (steps).
     pub input_lag: usize,
+    /// Power of the input factor; 0 leaves it out.
     pub input_power: u32,
     /// Another mode (0-based) whose output the term reads; `None` is the mode's own.
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -46,6 +50,7 @@ pub enum DamperTerm {
 }
 
 impl NarxTerm {
+    /// The constant term.
     pub const CONSTANT: NarxTerm =
         NarxTerm { output_lag: 0, output_power: 0, input_lag: 0, input_power: 0, output_mode: None, damper: None };
 
@@ -80,6 +85,7 @@ impl NarxTerm {
         self.output_power > 0 && (self.output_mode.is_none() || self.damper == Some(DamperTerm::Modulated))
     }
 
+    /// Whether the term is the constant.
     pub fn is_constant(&self) -> bool {
         self.output_power == 0 && self.input_power == 0
     }
@@ -197,7 +203,8 @@ impl Default for NarxOptions {
 }
 
 impl NarxOptions {
-    pub fn validate(&self) -> Result<()> {
+    /// Refuses options outside their bounds, naming the field.
+    pub fn check(&self) -> Result<()> {
         if !(1..=5).contains(&self.max_degree) {
             return Err(Error::invalid("narx.max_degree", format!("must be between 1 and 5, got {}", self.max_degree)));
         }
@@ -288,7 +295,9 @@ fn lagged(series: &[f64], t: usize, lag: usize, rest: f64) -> f64 {
 /// with its value at rest before t = 0.
 #[derive(Debug, Clone, Copy)]
 pub struct Exogenous<'a> {
+    /// The input series.
     pub q: &'a [f64],
+    /// The input at rest, before t = 0.
     pub q_rest: f64,
     /// Every mode's output series by mode index (the own entry is not read); empty without coupling.
     pub outputs: &'a [&'a [f64]],

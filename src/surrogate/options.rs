@@ -16,9 +16,13 @@ use serde::{Deserialize, Serialize};
 pub struct CalibrationOptions {
     /// Experiments K of the Latin-hypercube design.
     pub experiments: usize,
+    /// Seed of the Latin-hypercube design and of the experiments' storms.
     pub seed: u64,
+    /// The NARX dictionary and its structure selection.
     pub narx: NarxOptions,
+    /// The polynomial chaos expansions of the coefficients.
     pub pce: PceOptions,
+    /// How each experiment's coefficients are refined on the simulation error.
     pub refinement: Refinement,
     /// Experiments on which candidate structures are compared (evenly spread over the design).
     pub selection_experiments: usize,
@@ -51,7 +55,8 @@ impl Default for CalibrationOptions {
 pub const MAX_EXPERIMENTS: usize = 5000;
 
 impl CalibrationOptions {
-    pub fn validate(&self) -> Result<()> {
+    /// Refuses options outside their bounds, naming the field.
+    pub fn check(&self) -> Result<()> {
         if !(4..=MAX_EXPERIMENTS).contains(&self.experiments) {
             return Err(Error::invalid(
                 "experiments",
@@ -61,11 +66,11 @@ impl CalibrationOptions {
         if self.selection_experiments == 0 {
             return Err(Error::invalid("selection_experiments", "must be at least 1"));
         }
-        self.narx.validate()?;
+        self.narx.check()?;
         if let Some(coverage) = &self.cover_wind_speeds {
-            coverage.validate()?;
+            coverage.check()?;
         }
-        self.pce.validate()
+        self.pce.check()
     }
 }
 
@@ -74,8 +79,10 @@ impl CalibrationOptions {
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(deny_unknown_fields)]
 pub struct WindCoverage {
+    /// Lowest speed to cover (m/s).
     #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
     pub lower: f64,
+    /// Highest speed to cover (m/s).
     #[cfg_attr(feature = "openapi", schema(exclusive_minimum = 0, maximum = 150))]
     pub upper: f64,
 }
@@ -84,7 +91,8 @@ pub struct WindCoverage {
 const MAX_SPEED: f64 = 150.0;
 
 impl WindCoverage {
-    pub fn validate(&self) -> Result<()> {
+    /// Refuses speeds outside (0, 150] m/s or a lower speed not below the upper.
+    pub fn check(&self) -> Result<()> {
         let field = "cover_wind_speeds";
         if !(self.lower.is_finite() && self.upper.is_finite() && self.lower > 0.0 && self.upper <= MAX_SPEED) {
             return Err(Error::invalid(

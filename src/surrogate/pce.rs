@@ -52,7 +52,8 @@ impl Default for PceOptions {
 }
 
 impl PceOptions {
-    pub fn validate(&self) -> Result<()> {
+    /// Refuses options outside their bounds, naming the field.
+    pub fn check(&self) -> Result<()> {
         if !(1..=20).contains(&self.max_degree) {
             return Err(Error::invalid("pce.max_degree", format!("must be between 1 and 20, got {}", self.max_degree)));
         }
@@ -104,6 +105,7 @@ pub struct SparsePce {
     /// The retained terms, each a list of [input index, degree] pairs; the empty term is the constant.
     #[cfg_attr(feature = "openapi", schema(value_type = Vec<Vec<Vec<u64>>>))]
     pub terms: Vec<Term>,
+    /// Coefficient of each retained term, in the order of `terms`.
     pub coefficients: Vec<f64>,
     /// Total degree of the candidate basis the terms were chosen from.
     pub degree: usize,
@@ -239,7 +241,7 @@ impl SparsePce {
         options: &PceOptions,
         observer: &dyn Observer,
     ) -> Result<SparsePce> {
-        options.validate()?;
+        options.check()?;
         let n = targets.len();
         if n < 3 || xi.len() != n || weights.len() != n {
             return Err(Error::invalid("experiments", "a polynomial chaos fit needs at least 3 experiments"));

@@ -62,9 +62,11 @@ impl CalibrationPlan {
 /// What phase 3 needs of one experiment.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct ExperimentFit {
+    /// The experiment's index in the design.
     pub index: usize,
-    /// Per mode: mean modal force (N) and static modal displacement at rest under it (m).
+    /// Per mode: mean modal force (N).
     pub mean_load: Vec<f64>,
+    /// Per mode: static modal displacement at rest under that force (m).
     pub static_displacement: Vec<f64>,
     /// Per mode: the refined NARX coefficients of the plan's structure.
     pub coefficients: Vec<Vec<f64>>,
@@ -186,15 +188,17 @@ fn pooled_rms<'a>(series: impl Iterator<Item = &'a [f64]>, rest: impl Fn(usize) 
 
 /// Phase 1 done: the plan, with the selection experiments' histories kept for phase 3.
 pub struct Planned {
+    /// The plan every experiment's fit follows.
     pub plan: CalibrationPlan,
     selection: Vec<Experiment>,
+    /// Wall time of phase 1's stages (s).
     pub seconds: StageSeconds,
 }
 
 /// Phase 1: the design, the selection experiments through the reference (in parallel), the
 /// deviations' scales and every mode's structure.
 pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
-    options.validate()?;
+    options.check()?;
     let started = Instant::now();
     let design = design(study, options)?.points;
     let k = design.len();

@@ -26,7 +26,9 @@ pub enum Refinement {
 /// How one experiment's refinement ended.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 pub struct RefinementOutcome {
+    /// Why the optimiser stopped.
     pub stop: Stop,
+    /// Iterations it took.
     pub iterations: usize,
 }
 
@@ -44,11 +46,14 @@ pub struct RefinementSummary {
     pub no_improving_step: usize,
     /// The one-step fit's free run diverged, so the refinement could not start from it.
     pub undefined_start: usize,
+    /// Median iterations over the experiments.
     pub median_iterations: f64,
+    /// Most iterations of any experiment.
     pub max_iterations: usize,
 }
 
 impl RefinementSummary {
+    /// Counts how the refinements of one mode's experiments ended.
     pub fn of(outcomes: &[RefinementOutcome]) -> Self {
         let mut summary = RefinementSummary::default();
         for outcome in outcomes {

@@ -11,35 +11,51 @@ use statrs::function::gamma::gamma;
 #[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
 #[serde(tag = "distribution", rename_all = "snake_case", deny_unknown_fields)]
 pub enum Marginal {
+    /// Normal, given by its mean and standard deviation.
     Normal {
+        /// Mean, in the input's unit.
         mean: f64,
+        /// Standard deviation, in the input's unit.
         sd: f64,
     },
     /// Lognormal given by the mean and standard deviation of the variable itself.
     Lognormal {
+        /// Mean of the variable (not of its logarithm).
         mean: f64,
+        /// Standard deviation of the variable (not of its logarithm).
         sd: f64,
     },
+    /// Uniform between two bounds.
     Uniform {
+        /// Lower bound.
         lower: f64,
+        /// Upper bound, above `lower`.
         upper: f64,
     },
     /// Fréchet (extreme value type II, location 0) given by its mean and standard deviation.
     Frechet {
+        /// Mean, in the input's unit.
         mean: f64,
+        /// Standard deviation, at most the mean.
         sd: f64,
     },
     /// Gumbel (extreme value type I): F(x) = exp(−exp(−(x − location)/scale)).
     Gumbel {
+        /// Location μ: the mode.
         location: f64,
+        /// Scale β, positive.
         scale: f64,
     },
     /// Weibull (location 0) given by its mean and standard deviation.
     Weibull {
+        /// Mean, in the input's unit.
         mean: f64,
+        /// Standard deviation, in the input's unit.
         sd: f64,
     },
+    /// Not random: always `value`.
     Constant {
+        /// The value held.
         value: f64,
     },
 }
@@ -63,7 +79,7 @@ fn std_normal() -> Normal {
 
 impl Marginal {
     /// Checks the parameters; `field` names the input in messages.
-    pub fn validate(&self, field: &str) -> Result<()> {
+    pub fn check(&self, field: &str) -> Result<()> {
         match *self {
             Marginal::Normal { mean, sd } => {
                 require_finite(&format!("{field}.mean"), mean)?;
@@ -105,6 +121,7 @@ impl Marginal {
         Ok(())
     }
 
+    /// Mean of the distribution.
     pub fn mean(&self) -> f64 {
         match *self {
             Marginal::Normal { mean, .. }
@@ -140,6 +157,7 @@ impl Marginal {
         }
     }
 
+    /// The standard variable this marginal maps to.
     pub fn standard_space(&self) -> StandardSpace {
         match self {
             Marginal::Normal { .. }
@@ -466,10 +484,10 @@ mod tests {
 
     #[test]
     fn invalid_parameters_name_the_field() {
-        let err = Marginal::Lognormal { mean: -1.0, sd: 1.0 }.validate("inputs.mass_factor").unwrap_err();
+        let err = Marginal::Lognormal { mean: -1.0, sd: 1.0 }.check("inputs.mass_factor").unwrap_err();
         assert!(err.to_string().starts_with("inputs.mass_factor.mean"));
-        let err = Marginal::Uniform { lower: 1.0, upper: 1.0 }.validate("x").unwrap_err();
+        let err = Marginal::Uniform { lower: 1.0, upper: 1.0 }.check("x").unwrap_err();
         assert!(err.to_string().starts_with("x.upper"));
-        assert!(Marginal::Normal { mean: 0.0, sd: f64::NAN }.validate("x").is_err());
+        assert!(Marginal::Normal { mean: 0.0, sd: f64::NAN }.check("x").is_err());
     }
 }

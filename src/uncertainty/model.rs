@@ -7,7 +7,9 @@ use serde::{Deserialize, Serialize};
 /// One named input.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Input {
+    /// The input's name, e.g. `wind_speed`.
     pub name: String,
+    /// Its distribution.
     #[serde(flatten)]
     pub marginal: Marginal,
 }
@@ -16,28 +18,33 @@ pub struct Input {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(transparent)]
 pub struct InputModel {
+    /// The inputs, in sample order.
     pub inputs: Vec<Input>,
 }
 
 impl InputModel {
+    /// An input model of distinct names and valid marginals.
     pub fn new(inputs: Vec<Input>) -> Result<Self> {
         for (k, input) in inputs.iter().enumerate() {
             if inputs[..k].iter().any(|other| other.name == input.name) {
                 return Err(Error::invalid(format!("inputs.{}", input.name), "appears twice"));
             }
-            input.marginal.validate(&format!("inputs.{}", input.name))?;
+            input.marginal.check(&format!("inputs.{}", input.name))?;
         }
         Ok(InputModel { inputs })
     }
 
+    /// Number of inputs.
     pub fn len(&self) -> usize {
         self.inputs.len()
     }
 
+    /// Whether there are no inputs.
     pub fn is_empty(&self) -> bool {
         self.inputs.is_empty()
     }
 
+    /// The input names, in sample order.
     pub fn names(&self) -> impl Iterator<Item = &str> {
         self.inputs.iter().map(|i| i.name.as_str())
     }
@@ -52,6 +59,7 @@ impl InputModel {
         })
     }
 
+    /// The marginal of a named input, or an error listing the names that exist.
     pub fn marginal(&self, name: &str) -> Result<&Marginal> {
         Ok(&self.inputs[self.index_of(name)?].marginal)
     }
@@ -59,7 +67,7 @@ impl InputModel {
     /// Replaces the marginal of a named input (which must exist).
     pub fn with_marginal(mut self, name: &str, marginal: Marginal) -> Result<Self> {
         let k = self.index_of(name)?;
-        marginal.validate(&format!("inputs.{name}"))?;
+        marginal.check(&format!("inputs.{name}"))?;
         self.inputs[k].marginal = marginal;
         Ok(self)
     }

@@ -9,6 +9,7 @@ use rand::{RngExt, SeedableRng};
 /// (rand's `StdRng` is documented as not portable).
 pub type Rng = rand::rngs::Xoshiro256PlusPlus;
 
+/// The generator started from `seed`.
 pub fn rng_from_seed(seed: u64) -> Rng {
     Rng::seed_from_u64(seed)
 }

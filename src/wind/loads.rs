@@ -13,6 +13,7 @@ use faer::MatRef;
 /// The wind model of one building at one site.
 #[derive(Debug, Clone)]
 pub struct WindLoads {
+    /// The site's parameters: everything about the wind that is not uncertain.
     pub site: WindSite,
     /// Floor elevations z_j (m).
     pub heights: Vec<f64>,
@@ -21,8 +22,10 @@ pub struct WindLoads {
 }
 
 impl WindLoads {
+    /// The wind model of `structure` at `site`; its lowest floor must lie above the site's
+    /// roughness length.
     pub fn new(site: &WindSite, structure: &Structure) -> Result<Self> {
-        site.validate()?;
+        site.check()?;
         if structure.floor_elevations[0] <= site.site_roughness_m {
             return Err(Error::invalid(
                 "floor_elevations_m[0]",
@@ -35,10 +38,12 @@ impl WindLoads {
         Ok(WindLoads { site: site.clone(), heights: structure.floor_elevations.clone(), exposure })
     }
 
+    /// The cross-spectral density of the floors' speed fluctuations at a station speed (m/s).
     pub fn spectrum(&self, wind_speed: f64) -> FieldSpectrum {
         FieldSpectrum::new(&self.site, &self.heights, wind_speed)
     }
 
+    /// The site's frequency discretisation.
     pub fn grid(&self) -> SpectralGrid {
         SpectralGrid { lines: self.site.frequencies, cutoff: self.site.cutoff_rad_s }
     }

@@ -177,6 +177,7 @@ pub struct ModalWind {
 }
 
 impl ModalWind {
+    /// The generator for the modes `shapes` (floors × modes), its modal spectrum tabulated once.
     pub fn new(loads: &WindLoads, shapes: MatRef<'_, f64>) -> Self {
         let unit = loads.spectrum(1.0);
         let table = ModalSpectrumTable::new(&Self::projected(loads, shapes, &unit), &loads.grid());

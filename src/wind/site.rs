@@ -82,7 +82,8 @@ impl WindSite {
         2.0 * PI * self.frequencies as f64 / (self.cutoff_rad_s * self.field_generation_step_s)
     }
 
-    pub fn validate(&self) -> Result<()> {
+    /// Refuses a site whose parameters are out of range, naming the field.
+    pub fn check(&self) -> Result<()> {
         require_positive("wind.site_roughness_m", self.site_roughness_m)?;
         require_positive("wind.station_roughness_m", self.station_roughness_m)?;
         require_positive("wind.station_height_m", self.station_height_m)?;
@@ -149,7 +150,9 @@ impl WindSite {
 /// The time grid of one storm: `steps()` instants 0, Δt, …, T.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StormGrid {
+    /// Storm duration T (s).
     pub duration: f64,
+    /// Time step Δt (s).
     pub time_step: f64,
 }
 

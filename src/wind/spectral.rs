@@ -18,6 +18,7 @@ use std::f64::consts::PI;
 
 /// A cross-spectral density evaluated along an arithmetic sequence of frequencies.
 pub trait CrossSpectralDensity {
+    /// Number of components n.
     fn dim(&self) -> usize;
     /// Calls `visit(l, s)` for ω_l = ω₀ + l·Δω, l < count, where `s` is the two-sided CSD in rad/s,
     /// row-major n×n; at least its lower triangle is filled.
@@ -44,7 +45,9 @@ pub trait CrossSpectralDensity {
 /// The frequency discretisation: N lines per component below the cut-off ω_up.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SpectralGrid {
+    /// Frequency lines N per component.
     pub lines: usize,
+    /// Cut-off frequency ω_up (rad/s).
     pub cutoff: f64,
 }
 
@@ -64,7 +67,9 @@ impl SpectralGrid {
 /// that cubic interpolation has a neighbour before t = 0 and two after the end.
 #[derive(Debug, Clone)]
 pub struct CoarseSeries {
+    /// Step of the generation grid (s).
     pub step: f64,
+    /// `series[j][q]`: component j at t = (q − 1)·step.
     pub series: Vec<Vec<f64>>,
 }
 
@@ -114,6 +119,7 @@ pub struct CubicSchedule {
 }
 
 impl CubicSchedule {
+    /// The schedule of a grid of step `time_step` (s) on a generation grid of step `dt_g` (s).
     pub fn new(dt_g: f64, time_step: f64) -> Self {
         let per_step = dt_g / time_step;
         let r = per_step.round();

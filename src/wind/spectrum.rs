@@ -19,6 +19,7 @@ pub struct FieldSpectrum {
 }
 
 impl FieldSpectrum {
+    /// The spectrum at `heights` (m) for a station speed `station_speed` (m/s at 10 m).
     pub fn new(site: &WindSite, heights: &[f64], station_speed: f64) -> Self {
         let mean_speeds: Vec<f64> = heights.iter().map(|&z| site.mean_speed(z, station_speed)).collect();
         let u_star = site.shear_velocity(station_speed);
@@ -97,7 +98,9 @@ impl CrossSpectralDensity for FieldSpectrum {
 /// that A v(t) is the fluctuating part of the modal forces.
 #[derive(Debug, Clone)]
 pub struct ProjectedSpectrum<'a> {
+    /// The spectrum of the fluctuating speeds v.
     pub field: &'a FieldSpectrum,
+    /// The matrix A, n_out × n.
     pub projection: Mat<f64>,
 }
 

@@ -3,11 +3,10 @@
 
 use super::sampling::{SamplingResponses, Work, answer_now, answer_or_queue};
 use super::{ApiJson, ApiQuery, Page, accept_job};
-use crate::analysis::OnThisMachine;
+use crate::analysis::{OnThisMachine, held_inputs};
 use crate::service::cache::Loaded;
 use crate::service::demands::DemandsRequest;
 use crate::service::error::{ApiError, ProblemDetails};
-use crate::service::exceedance::held_inputs;
 use crate::service::exceedance::{ExceedanceAnswer, ExceedanceJob, ExceedanceRequest};
 use crate::service::routes::operations::Operation;
 use crate::service::work::Job;

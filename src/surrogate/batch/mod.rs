@@ -83,9 +83,12 @@ pub fn run(
 pub enum BatchError {
     /// A sample's model has no rest state.
     Model {
+        /// The sample's lane in the batch.
         lane: usize,
+        /// Why its model has no rest state.
         error: Error,
     },
+    /// A lane's free run left the range a sane model can produce.
     Diverged(Divergence),
 }
 

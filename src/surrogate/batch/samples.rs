@@ -8,6 +8,7 @@ use crate::wind::ForceSource;
 /// One mode's model as the batch runs it: the terms, and how its series are scaled.
 #[derive(Debug, Clone, Copy)]
 pub struct ModeProgram<'a> {
+    /// The mode's NARX terms, in the order of its coefficients.
     pub terms: &'a [NarxTerm],
     /// The NARX reads (Q − Q̄)/input_scale.
     pub input_scale: f64,
@@ -17,8 +18,9 @@ pub struct ModeProgram<'a> {
 
 /// One sample of a batch: its coefficients and forces.
 pub struct BatchSample<'a> {
-    /// theta[m]: the NARX coefficients of mode m, in the order of its terms.
+    /// `theta[m]`: the NARX coefficients of mode m, in the order of its terms.
     pub theta: Vec<Vec<f64>>,
+    /// The sample's modal forces.
     pub forces: &'a dyn ForceSource,
 }
 

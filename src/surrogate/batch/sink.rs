@@ -3,7 +3,7 @@
 //! peak request says which by its [`Reduction`]: a [`Combination`](Reduction::Combination) of the
 //! modal displacements, or the [`Motion`](Reduction::Motion), whose blocks go to a [`MotionSink`]
 //! that a [`SinkFactory`] builds for each batch (the accelerations and damper forces of
-//! `analysis::motion_peaks`). Also here: how a diverging lane is named.
+//! `analysis::responses::motion_peaks`). Also here: how a diverging lane is named.
 
 use crate::error::Result;
 use crate::simd::Lanes;
@@ -25,7 +25,14 @@ pub enum Sink<'a> {
     /// Per lane the peak over the storm of |offset + Σ_m gain_m ŷ_m| (a response u = Σ_m w_m y_m
     /// with y_m = level_m + scale_m ŷ_m: gain_m = w_m scale_m, offset = Σ_m w_m level_m), formed
     /// inside the batch's own vectorised code.
-    Peaks { gains: &'a [f64], offsets: Lanes, peaks: &'a mut Lanes },
+    Peaks {
+        /// gain_m = w_m scale_m of each mode.
+        gains: &'a [f64],
+        /// Per lane, offset = Σ_m w_m level_m.
+        offsets: Lanes,
+        /// Per lane, the running peak, raised in place.
+        peaks: &'a mut Lanes,
+    },
 }
 
 /// One sample of a batch: its number in the request, its physical inputs, its forces.
@@ -44,12 +51,16 @@ pub enum Reduction<'a> {
 /// Builds a batch's [`MotionSink`] from its lanes' physical inputs and its blocks' scales.
 pub type SinkFactory<'a> = dyn Fn(&[&[f64]], &ModalScales) -> Result<Box<dyn MotionSink>> + Sync + 'a;
 
-/// The scales of the free run's blocks, per mode: the output ŷ_m is (y_m − levels[m])/outputs[m]
-/// and the input q̂_m is (Q_m − Q̄_m)/inputs[m], `levels[m]` the static level of every lane.
+/// The scales of the free run's blocks, per mode: the output ŷ_m is
+/// (y_m − `levels[m]`)/`outputs[m]` and the input q̂_m is (Q_m − Q̄_m)/`inputs[m]`, `levels[m]`
+/// the static level of every lane.
 #[derive(Debug, Clone)]
 pub struct ModalScales {
+    /// Output scale of each mode (m).
     pub outputs: Vec<f64>,
+    /// Input scale of each mode (N).
     pub inputs: Vec<f64>,
+    /// Static level of each mode (m), per lane.
     pub levels: Vec<Lanes>,
 }
 
@@ -65,8 +76,11 @@ pub trait MotionSink {
 /// Where a lane's run left the range a sane model can produce.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Divergence {
+    /// The lane within the batch.
     pub lane: usize,
+    /// The mode, 0-based.
     pub mode: usize,
+    /// The time step at which the output left the bound.
     pub step: usize,
 }
 
