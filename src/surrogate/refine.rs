@@ -91,11 +91,11 @@ pub fn refine(
         Refinement::LevenbergMarquardt => {
             let stable = StableCoordinates::of(terms, damping_floor);
             let minimum = levenberg_marquardt(
-                stable.from_theta(theta),
+                stable.coordinates_of(theta),
                 |x| stable.normal_equations(x, |theta| normal_equations(terms, theta, record)),
                 observer,
             )?;
-            Minimum { x: stable.to_theta(&minimum.x), ..minimum }
+            Minimum { x: stable.theta_of(&minimum.x), ..minimum }
         }
         Refinement::NelderMead => nelder_mead(theta, |theta| sum_of_squares(terms, theta, record), observer)?,
         Refinement::None => return Ok((theta, None)),
@@ -134,7 +134,7 @@ impl StableCoordinates {
         StableCoordinates { ar2, floor: floor.max(f64::MIN_POSITIVE) }
     }
 
-    fn from_theta(&self, mut theta: Vec<f64>) -> Vec<f64> {
+    fn coordinates_of(&self, mut theta: Vec<f64>) -> Vec<f64> {
         if let Some((i1, i2)) = self.ar2 {
             let (a1, a2) = (theta[i1], theta[i2]);
             theta[i2] = (1.0 + a2 - self.floor).max(0.1 * self.floor).ln();
@@ -143,7 +143,7 @@ impl StableCoordinates {
         theta
     }
 
-    fn to_theta(&self, x: &[f64]) -> Vec<f64> {
+    fn theta_of(&self, x: &[f64]) -> Vec<f64> {
         let mut theta = x.to_vec();
         if let Some((i1, i2)) = self.ar2 {
             let (v, u) = (x[i1], x[i2]);
@@ -160,7 +160,7 @@ impl StableCoordinates {
         x: &[f64],
         in_theta: impl Fn(&[f64]) -> Option<NormalEquations>,
     ) -> Option<NormalEquations> {
-        let theta = self.to_theta(x);
+        let theta = self.theta_of(x);
         if theta.iter().any(|c| !c.is_finite()) {
             return None;
         }
@@ -274,8 +274,6 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
                     for (i, r) in row.iter_mut().enumerate() {
                         *r += dg * own_sensitivity(i);
                     }
-
-
                 }
                 continue;
             }
@@ -368,6 +366,59 @@ mod tests {
         let (refined, _) = refine(Refinement::LevenbergMarquardt, &terms, start, &data, 1e-9, &Silent).unwrap();
         let error = simulation_error(&terms, &refined, &data);
         assert!(error < 1e-10, "error {error}, θ = {refined:?}");
+    }
+
+    /// A truth whose linear part is damped less than the floor (1 + a₂ = 0.015, the damper term
+    /// carrying the rest) is refined to the best model that keeps the floor: every trial point
+    /// of Levenberg-Marquardt is a stable linear part, and the result sits at or above the floor;
+    /// with the floor below the truth's damping the truth comes back.
+    #[test]
+    fn the_refined_linear_part_keeps_the_damping_floor() {
+        use crate::surrogate::DamperLaw;
+        use crate::surrogate::narx::DamperTerm;
+        use std::sync::Arc;
+        let law = Arc::new(DamperLaw { exponent: 0.38, knees: vec![3e-3, 4e-3] });
+        let terms = [
+            NarxTerm::input(0, 1),
+            NarxTerm::output(1, 1, None),
+            NarxTerm::output(2, 1, None),
+            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
+        ];
+        let theta = [0.002, 1.98, -0.985, -0.02];
+        let other: Arc<[f64]> = (0..4000).map(|t| (t as f64 * 0.013).sin()).collect();
+        let base = record(&[0.0, 0.0, 0.0, 0.0], &arx().0, 4);
+        let mut data = Record { mode: 1, law: Some(law.clone()), ..base };
+        data.outputs = vec![other.clone(), other];
+        data.secants = Record::secants_of(&data.outputs, &law);
+        data.y = simulate(&terms, &theta, &data).unwrap().into();
+        let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
+        let method = Refinement::LevenbergMarquardt;
+        let (below, _) = refine(method, &terms, start.clone(), &data, 1e-3, &Silent).unwrap();
+        assert!(simulation_error(&terms, &below, &data) < 1e-10, "θ = {below:?}");
+        let floor = 0.02;
+        let (held, outcome) = refine(method, &terms, start, &data, floor, &Silent).unwrap();
+        assert!(1.0 + held[2] >= floor * (1.0 - 1e-12), "1 + a₂ = {}", 1.0 + held[2]);
+        assert!(1.0 - held[1] - held[2] > 0.0);
+        assert!(outcome.is_some_and(|o| o.stop != Stop::UndefinedStart));
+        assert!(simulation_error(&terms, &held, &data).is_finite());
+    }
+
+    /// The coordinates map back exactly, and a start below the floor is moved above it.
+    #[test]
+    fn stable_coordinates_round_trip() {
+        let terms = arx().0;
+        let stable = StableCoordinates::of(&terms, 1e-3);
+        let linear = super::super::parametrization::linear_outputs(&terms);
+        let mut theta = vec![0.0; terms.len()];
+        theta[linear[0]] = 1.97;
+        theta[linear[1]] = -0.98;
+        let back = stable.theta_of(&stable.coordinates_of(theta.clone()));
+        for (a, b) in theta.iter().zip(&back) {
+            assert!((a - b).abs() < 1e-14, "{theta:?} vs {back:?}");
+        }
+        theta[linear[1]] = -1.01;
+        let moved = stable.theta_of(&stable.coordinates_of(theta));
+        assert!(1.0 + moved[linear[1]] > 1e-3, "{moved:?}");
     }
 
     /// The summary counts each stop reason and takes the median and largest iteration counts.

@@ -192,6 +192,28 @@ fn custom_structure_runs() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The second test building (`tests/fixtures/tower30.json`, written by `tower30.py`): 30 storeys
+/// with a tapering stiffness, dampers in 20 storeys and at 5 outrigger levels in three groups.
+/// Its first frequency is the generator's 1.30 rad/s, and a small calibration of it validates.
+#[test]
+fn the_second_test_building_calibrates_and_validates() {
+    let spec = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/fixtures/tower30.json");
+    let modes = json(&["modes", "--spec", spec, "--json"]);
+    let omega = modes["frequencies_rad_s"][0].as_f64().unwrap();
+    assert!((omega - 1.30).abs() < 1e-3, "{omega}");
+    let dir = database("tower30");
+    let model = dir.with_file_name("tower30.json");
+    let model = model.to_str().unwrap();
+    let calibrate = ["calibrate", "--spec", spec, "--experiments", "16", "--duration", "120", "--out", model];
+    let out = windmeta(&calibrate);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let report = json(&["validate", "--model", model, "--samples", "4", "--seed", "2", "--json"]);
+    let displacement = &report["responses"][0];
+    assert_eq!(displacement["response"], "displacement");
+    // 16 storms of 120 s fit the roof displacement to well within 2 % on fresh storms.
+    assert!(displacement["median_peak_relative_error"].as_f64().unwrap() < 0.02, "{report}");
+}
+
 /// `windmeta bench --json` at a small size: every row measured, the headline figures present and
 /// consistent with the rows they come from (not their values: speed is never asserted in a test).
 #[test]

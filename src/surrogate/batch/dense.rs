@@ -12,8 +12,8 @@ use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::Vector;
 use crate::simd::{LANES, Lanes};
 use crate::surrogate::damper_law::secant_lanes;
-use crate::surrogate::narx::DamperTerm;
 use crate::surrogate::narx::DIVERGENCE_BOUND;
+use crate::surrogate::narx::DamperTerm;
 use crate::wind::CubicSchedule;
 
 /// Most modes, and longest lag, the fast recursion is compiled for.
