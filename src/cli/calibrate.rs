@@ -44,6 +44,11 @@ pub struct CalibrateArgs {
     /// (docs/method.md)
     #[arg(long, value_name = "BOOL", default_value_t = true, action = clap::ArgAction::Set)]
     pub damper_terms: bool,
+    /// Experimental: also each mode's own velocity at the law's secant at another mode's, with
+    /// stable linear parts (peak acceleration's bias under 1 % at full size; small designs can
+    /// give diverging models; docs/method.md)
+    #[arg(long)]
+    pub secant_terms: bool,
     /// Cover these wind speeds (m/s) beyond the input model's spread, as LOWER:UPPER; the fits
     /// are weighted so the expansions stay the input model's.
     #[arg(long, value_name = "LOWER:UPPER", conflicts_with = "cover_climate")]
@@ -112,6 +117,7 @@ pub fn calibrate(args: &CalibrateArgs) -> Result<String> {
     };
     options.narx.cross_terms = args.cross_terms;
     options.narx.damper_terms = args.damper_terms;
+    options.narx.secant_terms = args.secant_terms;
     options.cover_wind_speeds = coverage(args)?;
     let observer = Terminal { started: Instant::now(), last: Mutex::new(String::new()) };
     let metamodel = run_calibration(&study, &options, &observer)?;

@@ -114,7 +114,9 @@ pub fn refine(
 /// dampers move (a limit cycle where they do not). The expansions are of ln(1 + a₂) and ln s
 /// ([`super::parametrization::Parametrization::StableGains`]), so every experiment admits them
 /// and every predicted linear part is stable too. A start below the floor (a one-step fit whose
-/// damper terms took the damping) is moved just above it.
+/// damper terms took the damping) is moved just above it. Only structures with the own velocity
+/// at another mode's secant ([`DamperTerm::Modulated`]), the term that can take a mode's damping
+/// from its linear part, are refined in these coordinates; the others in their coefficients.
 struct StableCoordinates {
     /// Indices of a₁ and a₂, when the structure has exactly these two autoregressive terms.
     ar2: Option<(usize, usize)>,
@@ -129,8 +131,10 @@ const STIFFNESS_MARGIN: f64 = 1e-6;
 impl StableCoordinates {
     fn of(terms: &[NarxTerm], floor: f64) -> StableCoordinates {
         let linear = super::parametrization::linear_outputs(terms);
-        let ar2 = (linear.len() == 2 && terms[linear[0]].output_lag == 1 && terms[linear[1]].output_lag == 2)
-            .then(|| (linear[0], linear[1]));
+        let modulated = terms.iter().any(|t| t.damper == Some(DamperTerm::Modulated));
+        let ar2 =
+            (modulated && linear.len() == 2 && terms[linear[0]].output_lag == 1 && terms[linear[1]].output_lag == 2)
+                .then(|| (linear[0], linear[1]));
         StableCoordinates { ar2, floor: floor.max(f64::MIN_POSITIVE) }
     }
 
@@ -268,13 +272,15 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
                         }
                     }
                 };
-                value += c * g;
-                row[k] += g;
+                // The own output's sensitivities first, then the term's value: the order the
+                // law's own terms were always summed in, so that their refinements are unchanged.
                 if dg != 0.0 {
                     for (i, r) in row.iter_mut().enumerate() {
                         *r += dg * own_sensitivity(i);
                     }
                 }
+                value += c * g;
+                row[k] += g;
                 continue;
             }
             let y_lag = match term.output_mode {
@@ -406,9 +412,12 @@ mod tests {
     /// The coordinates map back exactly, and a start below the floor is moved above it.
     #[test]
     fn stable_coordinates_round_trip() {
-        let terms = arx().0;
+        use crate::surrogate::narx::DamperTerm;
+        let mut terms = arx().0;
+        terms.push(NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)));
         let stable = StableCoordinates::of(&terms, 1e-3);
         let linear = super::super::parametrization::linear_outputs(&terms);
+        assert!(StableCoordinates::of(&arx().0, 1e-3).ar2.is_none());
         let mut theta = vec![0.0; terms.len()];
         theta[linear[0]] = 1.97;
         theta[linear[1]] = -0.98;
