@@ -89,10 +89,11 @@ async fn prepare(
     state: &AppState,
     id: &str,
     owner: &str,
-    job: Job,
+    kind: &str,
+    request: &str,
     supervision: Arc<Supervision>,
 ) -> Result<WorkFuture> {
-    match job {
+    match Job::stored(kind, request)? {
         Job::Calibration(request) => {
             let (checked, config) = (request.clone(), state.config.clone());
             let (study, options) = blocking(move || checked.resolve(&config)).await?;
@@ -211,11 +212,7 @@ async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: Str
     let store: &Store = &state.store;
     let supervision = Arc::new(Supervision::default());
     let mut lease = LeaseKeeper::claimed(state.config.lease_ms);
-    let prepared = match Job::stored(kind, &request) {
-        Ok(job) => prepare(state, &id, owner, job, supervision.clone()).await,
-        Err(error) => Err(error),
-    };
-    let mut work = match prepared {
+    let mut work = match prepare(state, &id, owner, kind, &request, supervision.clone()).await {
         Ok(work) => work,
         Err(error) => {
             let reason = error.to_string();

@@ -74,14 +74,13 @@ pub enum Job {
 impl Job {
     /// An analysis of a stored metamodel, as the job of its kind.
     pub fn analysis(metamodel_id: String, request: AnalysisRequest) -> Job {
-        let kind = analysis_kind(&request);
         let job = AnalysisJob { metamodel_id, request };
-        match kind {
-            OperationKind::Hazard => Job::Hazard(job),
-            OperationKind::Fragility => Job::Fragility(job),
-            OperationKind::Sensitivity => Job::Sensitivity(job),
-            OperationKind::Serviceability => Job::Serviceability(job),
-            _ => Job::Sweep(job),
+        match &job.request {
+            AnalysisRequest::Hazard(_) => Job::Hazard(job),
+            AnalysisRequest::Fragility(_) => Job::Fragility(job),
+            AnalysisRequest::Sensitivity(_) => Job::Sensitivity(job),
+            AnalysisRequest::Serviceability(_) => Job::Serviceability(job),
+            AnalysisRequest::Sweep(_) => Job::Sweep(job),
         }
     }
 

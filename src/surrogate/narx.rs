@@ -185,7 +185,7 @@ pub struct NarxOptions {
     /// another mode's, Δ_m·S(Δ_s) (`DamperTerm::Modulated`), with every experiment's linear part
     /// refined in stable coordinates that keep half the structure's own damping. Experimental,
     /// off by default: at full size it takes the peak roof acceleration's mean bias on frame40-kn
-    /// from 3 % to under 1 %, but small designs (24 experiments of short storms) gave models whose
+    /// from 3 % to under 1 %, but the suite's small designs (a few dozen experiments of short storms) gave models whose
     /// free runs diverge on some fresh storms (docs/method.md).
     pub secant_terms: bool,
 }

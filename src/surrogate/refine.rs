@@ -185,22 +185,12 @@ impl StableCoordinates {
             }
         };
         let jtr: Vec<f64> = (0..n).map(|k| transform(&equations.jtr, k)).collect();
-        // Tᵀ (JᵀJ) T: transform the columns, then the rows.
-        let mut columns = vec![0.0; n * n];
-        for row in 0..n {
-            let r = &equations.jtj[row * n..(row + 1) * n];
-            for k in 0..n {
-                columns[row * n + k] = transform(r, k);
-            }
-        }
-        let mut jtj = vec![0.0; n * n];
-        for k in 0..n {
-            let column: Vec<f64> = (0..n).map(|row| columns[row * n + k]).collect();
-            for row in 0..n {
-                jtj[row * n + k] = transform(&column, row);
-            }
-        }
-        equations.jtj = jtj;
+        // Tᵀ (JᵀJ) T = ((JᵀJ T)ᵀ) T: the rows transformed, transposed, the rows transformed again.
+        let rows_transformed =
+            |m: &[f64]| -> Vec<f64> { (0..n * n).map(|e| transform(&m[e / n * n..(e / n + 1) * n], e % n)).collect() };
+        let half = rows_transformed(&equations.jtj);
+        let transposed: Vec<f64> = (0..n * n).map(|e| half[e % n * n + e / n]).collect();
+        equations.jtj = rows_transformed(&transposed);
         equations.jtr = jtr;
         Some(equations)
     }
@@ -344,14 +334,26 @@ mod tests {
         assert_eq!(refine(Refinement::None, &terms, start.clone(), &data, 1e-9, &Silent).unwrap(), (start, None));
     }
 
+    /// Mode 2's record of a model with damper terms, mode 1's output a sine and the law's knees
+    /// 3·10⁻³ and 4·10⁻³: the output the model itself gives.
+    fn damper_record(terms: &[NarxTerm], theta: &[f64]) -> Record {
+        use crate::surrogate::DamperLaw;
+        use std::sync::Arc;
+        let law = Arc::new(DamperLaw { exponent: 0.38, knees: vec![3e-3, 4e-3] });
+        let other: Arc<[f64]> = (0..4000).map(|t| (t as f64 * 0.013).sin()).collect();
+        let base = record(&[0.0, 0.0, 0.0, 0.0], &arx().0, 4);
+        let mut data = Record { mode: 1, law: Some(law.clone()), ..base };
+        data.outputs = vec![other.clone(), other];
+        data.secants = Record::secants_of(&data.outputs, &law);
+        data.y = simulate(terms, theta, &data).unwrap().into();
+        data
+    }
+
     /// The sensitivities of damper terms are right: from perturbed coefficients Levenberg-Marquardt
     /// returns to the truth of a model with the own velocity's law and another mode's secant.
     #[test]
     fn refinement_recovers_damper_term_coefficients() {
-        use crate::surrogate::DamperLaw;
         use crate::surrogate::narx::DamperTerm;
-        use std::sync::Arc;
-        let law = Arc::new(DamperLaw { exponent: 0.38, knees: vec![3e-3, 4e-3] });
         let terms = [
             NarxTerm::input(0, 1),
             NarxTerm::output(1, 1, None),
@@ -360,12 +362,7 @@ mod tests {
             NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
         ];
         let theta = [0.002, 1.98, -0.985, -0.004, -0.003];
-        let other: Arc<[f64]> = (0..4000).map(|t| (t as f64 * 0.013).sin()).collect();
-        let base = record(&[0.0, 0.0, 0.0, 0.0], &arx().0, 4);
-        let mut data = Record { mode: 1, law: Some(law.clone()), ..base };
-        data.outputs = vec![other.clone(), other];
-        data.secants = Record::secants_of(&data.outputs, &law);
-        data.y = simulate(&terms, &theta, &data).unwrap().into();
+        let data = damper_record(&terms, &theta);
         assert!(data.y.iter().any(|v| v.abs() > 0.05));
         let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
         assert!(simulation_error(&terms, &start, &data) > 1e-4);
@@ -380,10 +377,7 @@ mod tests {
     /// with the floor below the truth's damping the truth comes back.
     #[test]
     fn the_refined_linear_part_keeps_the_damping_floor() {
-        use crate::surrogate::DamperLaw;
         use crate::surrogate::narx::DamperTerm;
-        use std::sync::Arc;
-        let law = Arc::new(DamperLaw { exponent: 0.38, knees: vec![3e-3, 4e-3] });
         let terms = [
             NarxTerm::input(0, 1),
             NarxTerm::output(1, 1, None),
@@ -391,12 +385,7 @@ mod tests {
             NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
         ];
         let theta = [0.002, 1.98, -0.985, -0.02];
-        let other: Arc<[f64]> = (0..4000).map(|t| (t as f64 * 0.013).sin()).collect();
-        let base = record(&[0.0, 0.0, 0.0, 0.0], &arx().0, 4);
-        let mut data = Record { mode: 1, law: Some(law.clone()), ..base };
-        data.outputs = vec![other.clone(), other];
-        data.secants = Record::secants_of(&data.outputs, &law);
-        data.y = simulate(&terms, &theta, &data).unwrap().into();
+        let data = damper_record(&terms, &theta);
         let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
         let method = Refinement::LevenbergMarquardt;
         let (below, _) = refine(method, &terms, start.clone(), &data, 1e-3, &Silent).unwrap();
