@@ -44,10 +44,11 @@ pub struct CalibrateArgs {
     /// (docs/method.md)
     #[arg(long, value_name = "BOOL", default_value_t = true, action = clap::ArgAction::Set)]
     pub damper_terms: bool,
-    /// Experimental: also each mode's own velocity at the law's secant at another mode's, with
-    /// stable linear parts (peak acceleration's bias under 1 % at full size; small designs can
-    /// give diverging models; docs/method.md)
-    #[arg(long)]
+    /// With the dampers' law, also each mode's own velocity at the law's secant at another
+    /// mode's, refined and expanded as a damping (the peak acceleration's and damper force's
+    /// bias under 1 % at full size, where without it they are about 3 % low; docs/method.md);
+    /// false leaves it out
+    #[arg(long, value_name = "BOOL", default_value_t = true, action = clap::ArgAction::Set)]
     pub secant_terms: bool,
     /// Cover these wind speeds (m/s) beyond the input model's spread, as LOWER:UPPER; the fits
     /// are weighted so the expansions stay the input model's.

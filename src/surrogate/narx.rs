@@ -182,11 +182,12 @@ pub struct NarxOptions {
     /// False: the paper's dictionary alone, a 10 000-storm curve in about a third of the time.
     pub damper_terms: bool,
     /// With `damper_terms` and coupling, also each mode's own velocity at the law's secant at
-    /// another mode's, Δ_m·S(Δ_s) (`DamperTerm::Modulated`), with every experiment's linear part
-    /// refined in stable coordinates that keep half the structure's own damping. Experimental,
-    /// off by default: at full size it takes the peak roof acceleration's mean bias on frame40-kn
-    /// from 3 % to under 1 %, but the suite's small designs (a few dozen experiments of short storms) gave models whose
-    /// free runs diverge on some fresh storms (docs/method.md).
+    /// another mode's, Δ_m·S(Δ_s) (`DamperTerm::Modulated`): the force a mode's own motion
+    /// makes in dampers whose velocity is mostly another mode's. Every experiment's linear part
+    /// is refined in stable coordinates that keep half the structure's own damping and the
+    /// term's coefficient as a damping, and it is expanded as one, so no prediction is unstable
+    /// or a source of energy. At full size it takes the peak roof acceleration's mean bias on
+    /// frame40-kn from 3 % to under 1 % (docs/method.md).
     pub secant_terms: bool,
 }
 
@@ -205,7 +206,7 @@ impl Default for NarxOptions {
             max_terms: 10,
             coupling_lags: 2,
             damper_terms: true,
-            secant_terms: false,
+            secant_terms: true,
         }
     }
 }

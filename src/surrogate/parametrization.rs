@@ -11,7 +11,7 @@
 //! and for every group of terms of one kind at several lags (Q(t), Q(t−2); y(t−1)², y(t−2)²) the
 //! group's total gain in place of its first member. The map is exactly invertible.
 
-use super::narx::NarxTerm;
+use super::narx::{DamperTerm, NarxTerm};
 use serde::{Deserialize, Serialize};
 
 /// How NARX coefficients map to the expanded ones.
@@ -27,6 +27,18 @@ pub enum Parametrization {
     /// coefficient of the longest lag. For an AR(2) part, s > 0 and 1 + a₂ > 0 are its stability
     /// conditions (the third, a₂ − a₁ < 1, holds near a₂ ≈ −1), so every prediction is stable.
     StableGains,
+    /// As `StableGains`, with √(−θ/s) in place of the gain of every own velocity at another
+    /// mode's secant (Δy·S(y_j), a damping that follows another mode's motion), mapped back as
+    /// θ = −s·φ²: every predicted term of that kind is dissipative or zero, so the expansions
+    /// cannot turn a damper into a source of energy at inputs between or beyond the
+    /// experiments. A square root, not a logarithm, because an experiment may need none of the
+    /// term (θ = 0), where a logarithm is unbounded.
+    DissipativeGains,
+}
+
+/// The own velocity at another mode's secant, whose coefficient is a damping (negative).
+pub(super) fn dissipative_terms(terms: &[NarxTerm]) -> Vec<usize> {
+    (0..terms.len()).filter(|&i| terms[i].damper == Some(DamperTerm::Modulated)).collect()
 }
 
 /// The mode's own autoregressive terms c·y(t − l), by lag.
@@ -60,8 +72,10 @@ fn lag_groups(terms: &[NarxTerm]) -> Vec<Vec<usize>> {
 }
 
 impl Parametrization {
-    /// The best available for a structure and the coefficients of its experiments: stable gains
-    /// when every experiment admits the logarithms, else gains, else the coefficients themselves.
+    /// The best available for a structure and the coefficients of its experiments: dissipative
+    /// gains when the structure has own-velocity secant terms and every experiment admits their
+    /// logarithms and the linear part's, stable gains when every experiment admits the linear
+    /// part's, else gains, else the coefficients themselves.
     pub fn choose(terms: &[NarxTerm], experiments: &[Vec<f64>]) -> Parametrization {
         let linear = linear_outputs(terms);
         if linear.is_empty() {
@@ -71,7 +85,19 @@ impl Parametrization {
             let s = 1.0 - linear.iter().map(|&i| theta[i]).sum::<f64>();
             s > 0.0 && (linear.len() < 2 || 1.0 + theta[*linear.last().unwrap()] > 0.0)
         });
-        if admits_logs { Parametrization::StableGains } else { Parametrization::Gains }
+        let dissipative = dissipative_terms(terms);
+        let admits_dissipative = !dissipative.is_empty()
+            && experiments.iter().all(|theta| dissipative.iter().all(|&i| theta[i] <= 0.0 && theta[i].is_finite()));
+        match (admits_logs, admits_dissipative) {
+            (true, true) => Parametrization::DissipativeGains,
+            (true, false) => Parametrization::StableGains,
+            (false, _) => Parametrization::Gains,
+        }
+    }
+
+    /// Whether the linear part is expanded as ln s and ln(1 + a_n).
+    fn takes_stable_logs(self) -> bool {
+        matches!(self, Parametrization::StableGains | Parametrization::DissipativeGains)
     }
 
     /// NARX coefficients → expanded coefficients.
@@ -96,11 +122,16 @@ impl Parametrization {
         for group in &groups {
             phi[group[0]] = group.iter().map(|&i| theta[i]).sum::<f64>() / s;
         }
-        if self == Parametrization::StableGains {
+        if self.takes_stable_logs() {
             phi[linear[0]] = s.ln();
             if linear.len() >= 2 {
                 let last = *linear.last().unwrap();
                 phi[last] = (1.0 + theta[last]).ln();
+            }
+        }
+        if self == Parametrization::DissipativeGains {
+            for i in dissipative_terms(terms) {
+                phi[i] = (-phi[i]).max(0.0).sqrt();
             }
         }
         phi
@@ -113,7 +144,12 @@ impl Parametrization {
             return phi.to_vec();
         }
         let mut phi = phi.to_vec();
-        if self == Parametrization::StableGains {
+        if self == Parametrization::DissipativeGains {
+            for i in dissipative_terms(terms) {
+                phi[i] = -phi[i] * phi[i];
+            }
+        }
+        if self.takes_stable_logs() {
             phi[linear[0]] = phi[linear[0]].exp();
             if linear.len() >= 2 {
                 let last = *linear.last().unwrap();
@@ -161,5 +197,39 @@ mod tests {
         // A structure without autoregressive terms expands the coefficients directly.
         let static_terms = [NarxTerm::CONSTANT, d[1]];
         assert_eq!(Parametrization::choose(&static_terms, &[vec![1.0, 2.0]]), Parametrization::Direct);
+    }
+
+    /// With own-velocity secant terms whose coefficients are negative or zero in every
+    /// experiment, the expansions are of their square roots: the map round-trips, and any
+    /// expanded value (however far a polynomial strays) comes back as a damping.
+    #[test]
+    fn dissipative_gains_keep_the_sign() {
+        let options = NarxOptions { secant_terms: true, coupling_lags: 1, ..Default::default() };
+        let d = options.dictionary(1, 3, true);
+        let dissipative = dissipative_terms(&d);
+        assert_eq!(dissipative.len(), 2, "{d:?}");
+        let linear = linear_outputs(&d);
+        let mut theta: Vec<f64> = (0..d.len()).map(|i| 1e-3 * (i as f64 + 1.0)).collect();
+        theta[linear[0]] = 1.99;
+        theta[linear[1]] = -0.995;
+        for &i in &dissipative {
+            theta[i] = -2e-4 * (i as f64);
+        }
+        theta[dissipative[1]] = 0.0;
+        let p = Parametrization::choose(&d, std::slice::from_ref(&theta));
+        assert_eq!(p, Parametrization::DissipativeGains);
+        let back = p.inverse(&d, &p.forward(&d, &theta));
+        for (a, b) in theta.iter().zip(&back) {
+            assert!((a - b).abs() < 1e-14 * a.abs().max(1.0), "{theta:?} vs {back:?}");
+        }
+        let mut strayed = p.forward(&d, &theta);
+        for &i in &dissipative {
+            strayed[i] -= 40.0;
+        }
+        assert!(dissipative.iter().all(|&i| p.inverse(&d, &strayed)[i] < 0.0));
+        // One experiment with a positive coefficient keeps the plain stable gains.
+        let mut positive = theta.clone();
+        positive[dissipative[0]] = 1e-5;
+        assert_eq!(Parametrization::choose(&d, &[theta, positive]), Parametrization::StableGains);
     }
 }

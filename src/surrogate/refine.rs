@@ -117,9 +117,16 @@ pub fn refine(
 /// damper terms took the damping) is moved just above it. Only structures with the own velocity
 /// at another mode's secant ([`DamperTerm::Modulated`]), the term that can take a mode's damping
 /// from its linear part, are refined in these coordinates; the others in their coefficients.
+/// That term's own coefficient c is refined as w with c = −w²: a damping (or none) at every
+/// trial point, so that the expansions of √(−c/s)
+/// ([`super::parametrization::Parametrization::DissipativeGains`]) are admitted by every
+/// experiment and no prediction turns the term into a source of energy (an expansion of the
+/// plain gain crossed zero below the design, and the free run grew).
 struct StableCoordinates {
     /// Indices of a₁ and a₂, when the structure has exactly these two autoregressive terms.
     ar2: Option<(usize, usize)>,
+    /// Indices of the own-velocity secant terms, refined in w = √(−c).
+    dissipative: Vec<usize>,
     /// f, the least 1 + a₂ (positive).
     floor: f64,
 }
@@ -135,7 +142,8 @@ impl StableCoordinates {
         let ar2 =
             (modulated && linear.len() == 2 && terms[linear[0]].output_lag == 1 && terms[linear[1]].output_lag == 2)
                 .then(|| (linear[0], linear[1]));
-        StableCoordinates { ar2, floor: floor.max(f64::MIN_POSITIVE) }
+        let dissipative = super::parametrization::dissipative_terms(terms);
+        StableCoordinates { ar2, dissipative, floor: floor.max(f64::MIN_POSITIVE) }
     }
 
     fn coordinates_of(&self, mut theta: Vec<f64>) -> Vec<f64> {
@@ -143,6 +151,11 @@ impl StableCoordinates {
             let (a1, a2) = (theta[i1], theta[i2]);
             theta[i2] = (1.0 + a2 - self.floor).max(0.1 * self.floor).ln();
             theta[i1] = (1.0 - a1 - a2).max(STIFFNESS_MARGIN).ln();
+        }
+        for &i in &self.dissipative {
+            // A one-step fit that made the term a source starts from a tenth of it as a damping
+            // (w = 0 would be a stationary point the refinement could not leave).
+            theta[i] = (-theta[i]).max(0.1 * theta[i].abs()).sqrt();
         }
         theta
     }
@@ -154,11 +167,14 @@ impl StableCoordinates {
             theta[i2] = (self.floor - 1.0) + u.exp();
             theta[i1] = 1.0 - v.exp() - theta[i2];
         }
+        for &i in &self.dissipative {
+            theta[i] = -x[i] * x[i];
+        }
         theta
     }
 
     /// The normal equations in these coordinates: J_x = J_θ·T with T = ∂θ/∂x, identity but for
-    /// ∂a₂/∂u = e^u, ∂a₁/∂u = −e^u, ∂a₁/∂v = −e^v.
+    /// ∂a₂/∂u = e^u, ∂a₁/∂u = −e^u, ∂a₁/∂v = −e^v and ∂c/∂w = −2w.
     fn normal_equations(
         &self,
         x: &[f64],
@@ -169,20 +185,20 @@ impl StableCoordinates {
             return None;
         }
         let mut equations = in_theta(&theta)?;
-        let Some((i1, i2)) = self.ar2 else {
+        if self.ar2.is_none() && self.dissipative.is_empty() {
             return Some(equations);
-        };
+        }
         let n = x.len();
-        let (eu, ev) = (x[i2].exp(), x[i1].exp());
-        // Columns of T that differ from the identity: column i2 = e^u (e_i2 − e_i1), column i1 = −e^v e_i1.
+        let ar2 = self.ar2.map(|(i1, i2)| (i1, i2, x[i2].exp(), x[i1].exp()));
+        // Columns of T that differ from the identity: column i2 = e^u (e_i2 − e_i1), column
+        // i1 = −e^v e_i1, and column i = −2w_i e_i for each dissipative term.
         let transform = |v: &[f64], k: usize| -> f64 {
-            if k == i2 {
-                eu * (v[i2] - v[i1])
-            } else if k == i1 {
-                -ev * v[i1]
-            } else {
-                v[k]
+            match ar2 {
+                Some((i1, i2, eu, _)) if k == i2 => return eu * (v[i2] - v[i1]),
+                Some((i1, _, _, ev)) if k == i1 => return -ev * v[i1],
+                _ => {}
             }
+            if self.dissipative.contains(&k) { -2.0 * x[k] * v[k] } else { v[k] }
         };
         let jtr: Vec<f64> = (0..n).map(|k| transform(&equations.jtr, k)).collect();
         // Tᵀ (JᵀJ) T = ((JᵀJ T)ᵀ) T: the rows transformed, transposed, the rows transformed again.
@@ -398,7 +414,8 @@ mod tests {
         assert!(simulation_error(&terms, &held, &data).is_finite());
     }
 
-    /// The coordinates map back exactly, and a start below the floor is moved above it.
+    /// The coordinates map back exactly, and a start below the floor, or with a secant term that
+    /// gives energy, is moved to a stable and dissipative one.
     #[test]
     fn stable_coordinates_round_trip() {
         use crate::surrogate::narx::DamperTerm;
@@ -415,8 +432,12 @@ mod tests {
             assert!((a - b).abs() < 1e-14, "{theta:?} vs {back:?}");
         }
         theta[linear[1]] = -1.01;
+        let modulated = terms.len() - 1;
+        theta[modulated] = 2e-3;
         let moved = stable.theta_of(&stable.coordinates_of(theta));
         assert!(1.0 + moved[linear[1]] > 1e-3, "{moved:?}");
+        // A secant term that a one-step fit made a source starts as a tenth of it, a damping.
+        assert!((moved[modulated] + 2e-4).abs() < 1e-18, "{moved:?}");
     }
 
     /// The summary counts each stop reason and takes the median and largest iteration counts.
