@@ -414,6 +414,26 @@ mod tests {
         assert!(simulation_error(&terms, &held, &data).is_finite());
     }
 
+    /// A truth whose secant term gives energy (c > 0, the linear part's damping holding it) is
+    /// refined to the best model whose term is a damping or none: every trial point keeps c ≤ 0.
+    #[test]
+    fn the_refined_secant_term_stays_a_damping() {
+        use crate::surrogate::narx::DamperTerm;
+        let terms = [
+            NarxTerm::input(0, 1),
+            NarxTerm::output(1, 1, None),
+            NarxTerm::output(2, 1, None),
+            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
+        ];
+        let theta = [0.002, 1.98, -0.985, 2e-4];
+        let data = damper_record(&terms, &theta);
+        let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
+        let (refined, outcome) = refine(Refinement::LevenbergMarquardt, &terms, start, &data, 1e-3, &Silent).unwrap();
+        assert!(refined[3] <= 0.0, "θ = {refined:?}");
+        assert!(outcome.is_some_and(|o| o.stop != Stop::UndefinedStart));
+        assert!(simulation_error(&terms, &refined, &data).is_finite());
+    }
+
     /// The coordinates map back exactly, and a start below the floor, or with a secant term that
     /// gives energy, is moved to a stable and dissipative one.
     #[test]
