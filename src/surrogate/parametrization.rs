@@ -27,13 +27,24 @@ pub enum Parametrization {
     /// coefficient of the longest lag. For an AR(2) part, s > 0 and 1 + a₂ > 0 are its stability
     /// conditions (the third, a₂ − a₁ < 1, holds near a₂ ≈ −1), so every prediction is stable.
     StableGains,
-    /// As `StableGains`, with √(−θ/s) in place of the gain of every own velocity at another
+    /// As `StableGains`, an AR(2) part expanded as logit(s/2) and logit(1 + a₂) (stable at any
+    /// value), and √(−θ/s) in place of the gain of every own velocity at another
     /// mode's secant (Δy·S(y_j), a damping that follows another mode's motion), mapped back as
     /// θ = −s·φ²: every predicted term of that kind is dissipative or zero, so the expansions
     /// cannot turn a damper into a source of energy at inputs between or beyond the
     /// experiments. A square root, not a logarithm, because an experiment may need none of the
     /// term (θ = 0), where a logarithm is unbounded.
     DissipativeGains,
+}
+
+/// ln(p / (1 − p)).
+fn logit(p: f64) -> f64 {
+    (p / (1.0 - p)).ln()
+}
+
+/// 1 / (1 + e^(−x)), the inverse of [`logit`].
+fn logistic(x: f64) -> f64 {
+    1.0 / (1.0 + (-x).exp())
 }
 
 /// The own velocity at another mode's secant, whose coefficient is a damping (negative).
@@ -86,8 +97,17 @@ impl Parametrization {
             s > 0.0 && (linear.len() < 2 || 1.0 + theta[*linear.last().unwrap()] > 0.0)
         });
         let dissipative = dissipative_terms(terms);
+        let within_triangle = |theta: &[f64]| {
+            linear.len() != 2 || {
+                let (a1, a2) = (theta[linear[0]], theta[linear[1]]);
+                let s = 1.0 - a1 - a2;
+                s < 2.0 && -1.0 < a2 && a2 < 0.0
+            }
+        };
         let admits_dissipative = !dissipative.is_empty()
-            && experiments.iter().all(|theta| dissipative.iter().all(|&i| theta[i] <= 0.0 && theta[i].is_finite()));
+            && experiments.iter().all(|theta| {
+                within_triangle(theta) && dissipative.iter().all(|&i| theta[i] <= 0.0 && theta[i].is_finite())
+            });
         match (admits_logs, admits_dissipative) {
             (true, true) => Parametrization::DissipativeGains,
             (true, false) => Parametrization::StableGains,
@@ -98,6 +118,16 @@ impl Parametrization {
     /// Whether the linear part is expanded as ln s and ln(1 + a_n).
     fn takes_stable_logs(self) -> bool {
         matches!(self, Parametrization::StableGains | Parametrization::DissipativeGains)
+    }
+
+    /// The indices of s and a₂ when the linear part is an AR(2) expanded within the whole of its
+    /// stability triangle (dissipative gains): logit(s/2) and logit(1 + a₂), so that every
+    /// prediction has 0 < s < 2 and −1 < a₂ < 0, which with a₁ = 1 − s − a₂ satisfies all three
+    /// conditions (a₂ > −1, a₁ + a₂ < 1, a₂ − a₁ < 1) however far an expansion strays. The
+    /// logarithms alone bound only two: continued below a small design, mode 3's ln(1 + a₂)
+    /// grew to 1 + a₂ = 1.3·10⁴ at 12 m/s and the free run diverged in three steps.
+    fn bounded_ar2(self, linear: &[usize]) -> Option<(usize, usize)> {
+        (self == Parametrization::DissipativeGains && linear.len() == 2).then(|| (linear[0], linear[1]))
     }
 
     /// NARX coefficients → expanded coefficients.
@@ -122,7 +152,10 @@ impl Parametrization {
         for group in &groups {
             phi[group[0]] = group.iter().map(|&i| theta[i]).sum::<f64>() / s;
         }
-        if self.takes_stable_logs() {
+        if let Some((first, last)) = self.bounded_ar2(&linear) {
+            phi[first] = logit(s / 2.0);
+            phi[last] = logit(1.0 + theta[last]);
+        } else if self.takes_stable_logs() {
             phi[linear[0]] = s.ln();
             if linear.len() >= 2 {
                 let last = *linear.last().unwrap();
@@ -149,7 +182,10 @@ impl Parametrization {
                 phi[i] = -phi[i] * phi[i];
             }
         }
-        if self.takes_stable_logs() {
+        if let Some((first, last)) = self.bounded_ar2(&linear) {
+            phi[first] = 2.0 * logistic(phi[first]);
+            phi[last] = logistic(phi[last]) - 1.0;
+        } else if self.takes_stable_logs() {
             phi[linear[0]] = phi[linear[0]].exp();
             if linear.len() >= 2 {
                 let last = *linear.last().unwrap();
@@ -227,6 +263,18 @@ mod tests {
             strayed[i] -= 40.0;
         }
         assert!(dissipative.iter().all(|&i| p.inverse(&d, &strayed)[i] < 0.0));
+        // However far the linear part's expansions stray, it stays inside the stability triangle
+        // (on its edge to rounding where the logistic saturates, 40 away).
+        let tolerance = 1e-12;
+        for (ds, da2) in [(40.0, 40.0), (-40.0, 40.0), (40.0, -40.0), (9.0, 9.0), (-9.0, -9.0)] {
+            let mut far = p.forward(&d, &theta);
+            far[linear[0]] += ds;
+            far[linear[1]] += da2;
+            let back = p.inverse(&d, &far);
+            let (a1, a2) = (back[linear[0]], back[linear[1]]);
+            let inside = a2 > -1.0 - tolerance && a1 + a2 < 1.0 + tolerance && a2 - a1 < 1.0 + tolerance;
+            assert!(inside, "a₁ = {a1}, a₂ = {a2}");
+        }
         // One experiment with a positive coefficient keeps the plain stable gains.
         let mut positive = theta.clone();
         positive[dissipative[0]] = 1e-5;
