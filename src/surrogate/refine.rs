@@ -138,11 +138,12 @@ const STIFFNESS_MARGIN: f64 = 1e-6;
 impl StableCoordinates {
     fn of(terms: &[NarxTerm], floor: f64) -> StableCoordinates {
         let linear = super::parametrization::linear_outputs(terms);
-        let modulated = terms.iter().any(|t| t.damper == Some(DamperTerm::Modulated));
-        let ar2 =
-            (modulated && linear.len() == 2 && terms[linear[0]].output_lag == 1 && terms[linear[1]].output_lag == 2)
-                .then(|| (linear[0], linear[1]));
         let dissipative = super::parametrization::dissipative_terms(terms);
+        let ar2 = (!dissipative.is_empty()
+            && linear.len() == 2
+            && terms[linear[0]].output_lag == 1
+            && terms[linear[1]].output_lag == 2)
+            .then(|| (linear[0], linear[1]));
         StableCoordinates { ar2, dissipative, floor: floor.max(f64::MIN_POSITIVE) }
     }
 
@@ -387,19 +388,24 @@ mod tests {
         assert!(error < 1e-10, "error {error}, θ = {refined:?}");
     }
 
+    /// A mode's AR(2) part with its input and its own velocity at mode 1's secant.
+    fn secant_structure() -> [NarxTerm; 4] {
+        use crate::surrogate::narx::DamperTerm;
+        [
+            NarxTerm::input(0, 1),
+            NarxTerm::output(1, 1, None),
+            NarxTerm::output(2, 1, None),
+            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
+        ]
+    }
+
     /// A truth whose linear part is damped less than the floor (1 + a₂ = 0.015, the damper term
     /// carrying the rest) is refined to the best model that keeps the floor: every trial point
     /// of Levenberg-Marquardt is a stable linear part, and the result sits at or above the floor;
     /// with the floor below the truth's damping the truth comes back.
     #[test]
     fn the_refined_linear_part_keeps_the_damping_floor() {
-        use crate::surrogate::narx::DamperTerm;
-        let terms = [
-            NarxTerm::input(0, 1),
-            NarxTerm::output(1, 1, None),
-            NarxTerm::output(2, 1, None),
-            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
-        ];
+        let terms = secant_structure();
         let theta = [0.002, 1.98, -0.985, -0.02];
         let data = damper_record(&terms, &theta);
         let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
@@ -418,13 +424,7 @@ mod tests {
     /// refined to the best model whose term is a damping or none: every trial point keeps c ≤ 0.
     #[test]
     fn the_refined_secant_term_stays_a_damping() {
-        use crate::surrogate::narx::DamperTerm;
-        let terms = [
-            NarxTerm::input(0, 1),
-            NarxTerm::output(1, 1, None),
-            NarxTerm::output(2, 1, None),
-            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
-        ];
+        let terms = secant_structure();
         let theta = [0.002, 1.98, -0.985, 2e-4];
         let data = damper_record(&terms, &theta);
         let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
