@@ -114,9 +114,12 @@ pub fn refine(
 /// dampers move (a limit cycle where they do not). The expansions are of ln(1 + a₂) and ln s
 /// ([`super::parametrization::Parametrization::StableGains`]), so every experiment admits them
 /// and every predicted linear part is stable too. A start below the floor (a one-step fit whose
-/// damper terms took the damping) is moved just above it. Only structures with the own velocity
-/// at another mode's secant ([`DamperTerm::Modulated`]), the term that can take a mode's damping
-/// from its linear part, are refined in these coordinates; the others in their coefficients.
+/// damper terms took the damping) is moved just above it. Only structures with a term of the own
+/// velocity (its law D(Δy), or [`DamperTerm::Modulated`]), the terms that can take a mode's
+/// damping from its linear part, are refined in these coordinates; the others in their
+/// coefficients. (With the law alone refined freely, a design covering 18-62 m/s had a mode 1
+/// whose linear part was unstable in some experiment: its expansions fell back to plain gains and
+/// the free run diverged at 20 m/s.)
 /// That term's own coefficient c is refined as w with c = −w²: a damping (or none) at every
 /// trial point, so that the expansions of √(−c/s)
 /// ([`super::parametrization::Parametrization::DissipativeGains`]) are admitted by every
@@ -139,11 +142,12 @@ impl StableCoordinates {
     fn of(terms: &[NarxTerm], floor: f64) -> StableCoordinates {
         let linear = super::parametrization::linear_outputs(terms);
         let dissipative = super::parametrization::dissipative_terms(terms);
-        let ar2 = (!dissipative.is_empty()
-            && linear.len() == 2
-            && terms[linear[0]].output_lag == 1
-            && terms[linear[1]].output_lag == 2)
-            .then(|| (linear[0], linear[1]));
+        // Any term of the own velocity (its law, or its secant at another mode's) can take the
+        // damping from the linear part.
+        let own_velocity = terms.iter().any(|t| t.damper.is_some() && t.reads_own_output());
+        let ar2 =
+            (own_velocity && linear.len() == 2 && terms[linear[0]].output_lag == 1 && terms[linear[1]].output_lag == 2)
+                .then(|| (linear[0], linear[1]));
         StableCoordinates { ar2, dissipative, floor: floor.max(f64::MIN_POSITIVE) }
     }
 
@@ -248,21 +252,22 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
     let lagged = |series: &[f64], t: usize, lag: usize, rest: f64| if lag > t { rest } else { series[t - lag] };
     y_hat[0] = rest;
     s[..p].copy_from_slice(&rest_sensitivity);
+    // s(t) = g(t) + Σ_l b_l(t)·s(t − l): each step gathers the slopes b_l of its value in the own
+    // output l steps back, then adds the lagged sensitivity rows once per lag (a short loop over
+    // the coefficients that vectorises) rather than once per term that reads the output.
+    let depth = terms.iter().filter(|t| t.reads_own_output()).map(NarxTerm::reach).max().unwrap_or(0);
+    let mut slopes = vec![0.0; depth + 1];
     let mut row = vec![0.0; p];
     for t in 1..n {
         let mut value = 0.0;
         row.fill(0.0);
+        slopes.fill(0.0);
         for (k, (term, c)) in terms.iter().zip(theta).enumerate() {
             if let Some(kind) = term.damper {
                 let law = law?;
                 let lag = term.output_lag;
                 let difference =
                     |series: &[f64], rest: f64| lagged(series, t, lag, rest) - lagged(series, t, lag + 1, rest);
-                // ∂Δ/∂θ_i = s_i(t−l) − s_i(t−l−1) for the own output; before t = 0 at rest.
-                let own_sensitivity = |i: usize| {
-                    let at = |step: Option<usize>| step.map_or(rest_sensitivity[i], |u| s[u * p + i]);
-                    at(t.checked_sub(lag)) - at(t.checked_sub(lag + 1))
-                };
                 // Δ·S(Δ) of the own velocity is D(Δ): a modulated term of the own mode is its law.
                 let (g, dg) = match (kind, term.output_mode) {
                     (_, None) => {
@@ -279,12 +284,10 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
                         }
                     }
                 };
-                // The own output's sensitivities first, then the term's value: the order the
-                // law's own terms were always summed in, so that their refinements are unchanged.
+                // ∂Δ/∂ŷ(t − l) = 1 and ∂Δ/∂ŷ(t − l − 1) = −1 for the own output.
                 if dg != 0.0 {
-                    for (i, r) in row.iter_mut().enumerate() {
-                        *r += dg * own_sensitivity(i);
-                    }
+                    slopes[lag] += dg;
+                    slopes[lag + 1] -= dg;
                 }
                 value += c * g;
                 row[k] += g;
@@ -301,11 +304,14 @@ fn normal_equations(terms: &[NarxTerm], theta: &[f64], record: &Record) -> Optio
             value += c * g;
             row[k] += g;
             if term.reads_own_output() {
-                let dg = c * term.output_derivative(y_lag, q_lag);
-                let source = t.saturating_sub(term.output_lag);
-                for i in 0..p {
-                    row[i] += dg * s[source * p + i];
-                }
+                slopes[term.output_lag] += c * term.output_derivative(y_lag, q_lag);
+            }
+        }
+        // Before t = 0 the run is at rest, whose sensitivities are row 0's.
+        for (lag, &slope) in slopes.iter().enumerate().skip(1).filter(|(_, b)| **b != 0.0) {
+            let source = t.saturating_sub(lag) * p;
+            for (r, ds) in row.iter_mut().zip(&s[source..source + p]) {
+                *r = slope.mul_add(*ds, *r);
             }
         }
         if diverged(value) {
@@ -399,25 +405,30 @@ mod tests {
         ]
     }
 
-    /// A truth whose linear part is damped less than the floor (1 + a₂ = 0.015, the damper term
-    /// carrying the rest) is refined to the best model that keeps the floor: every trial point
-    /// of Levenberg-Marquardt is a stable linear part, and the result sits at or above the floor;
-    /// with the floor below the truth's damping the truth comes back.
+    /// A truth whose linear part is damped less than the floor (1 + a₂ = 0.015, a term of the own
+    /// velocity carrying the rest: its secant at mode 1's, or its own law) is refined to the best
+    /// model that keeps the floor: every trial point of Levenberg-Marquardt is a stable linear
+    /// part, and the result sits at or above the floor; with the floor below the truth's damping
+    /// the truth comes back.
     #[test]
     fn the_refined_linear_part_keeps_the_damping_floor() {
-        let terms = secant_structure();
-        let theta = [0.002, 1.98, -0.985, -0.02];
-        let data = damper_record(&terms, &theta);
-        let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
-        let method = Refinement::LevenbergMarquardt;
-        let (below, _) = refine(method, &terms, start.clone(), &data, 1e-3, &Silent).unwrap();
-        assert!(simulation_error(&terms, &below, &data) < 1e-10, "θ = {below:?}");
-        let floor = 0.02;
-        let (held, outcome) = refine(method, &terms, start, &data, floor, &Silent).unwrap();
-        assert!(1.0 + held[2] >= floor * (1.0 - 1e-12), "1 + a₂ = {}", 1.0 + held[2]);
-        assert!(1.0 - held[1] - held[2] > 0.0);
-        assert!(outcome.is_some_and(|o| o.stop != Stop::UndefinedStart));
-        assert!(simulation_error(&terms, &held, &data).is_finite());
+        use crate::surrogate::narx::DamperTerm;
+        let mut own_law = secant_structure();
+        own_law[3] = NarxTerm::damper(DamperTerm::Law, 1, None);
+        for terms in [secant_structure(), own_law] {
+            let theta = [0.002, 1.98, -0.985, -0.02];
+            let data = damper_record(&terms, &theta);
+            let start: Vec<f64> = theta.iter().map(|v| v * 1.002).collect();
+            let method = Refinement::LevenbergMarquardt;
+            let (below, _) = refine(method, &terms, start.clone(), &data, 1e-3, &Silent).unwrap();
+            assert!(simulation_error(&terms, &below, &data) < 1e-10, "{}: θ = {below:?}", terms[3]);
+            let floor = 0.02;
+            let (held, outcome) = refine(method, &terms, start, &data, floor, &Silent).unwrap();
+            assert!(1.0 + held[2] >= floor * (1.0 - 1e-12), "{}: 1 + a₂ = {}", terms[3], 1.0 + held[2]);
+            assert!(1.0 - held[1] - held[2] > 0.0);
+            assert!(outcome.is_some_and(|o| o.stop != Stop::UndefinedStart));
+            assert!(simulation_error(&terms, &held, &data).is_finite());
+        }
     }
 
     /// A truth whose secant term gives energy (c > 0, the linear part's damping holding it) is
