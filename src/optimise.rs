@@ -96,7 +96,7 @@ pub fn levenberg_marquardt(
                 let improvement = (sum_of_squares - next.sum_of_squares) / sum_of_squares;
                 x = trial;
                 current = next;
-                lambda = (lambda / 3.0).max(1e-12);
+                lambda = (lambda / 10.0).max(1e-12);
                 if improvement < 1e-10 {
                     stop = Stop::Converged;
                     break;
