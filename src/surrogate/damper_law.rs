@@ -67,14 +67,8 @@ fn secant(difference: f64, knee: f64, exponent: f64) -> f64 {
     secant_lanes([difference], knee, exponent)[0]
 }
 
-/// D(Δ) = Δ·S(Δ) of every lane, vectorised (see [`power_lanes`]); lane by lane the value of
-/// `Δ * secant(Δ, κ, α)`, to the bit.
-#[inline(always)]
-pub fn law_lanes<const N: usize>(difference: [f64; N], knee: f64, exponent: f64) -> [f64; N] {
-    let secants = secant_lanes(difference, knee, exponent);
-    std::array::from_fn(|l| difference[l] * secants[l])
-}
-
+/// S(Δ) of every lane, vectorised (see [`power_lanes`]); lane by lane the value of
+/// `secant(Δ, κ, α)`, to the bit, so that Δ·S(Δ) is [`DamperLaw::value`].
 #[inline(always)]
 pub fn secant_lanes<const N: usize>(difference: [f64; N], knee: f64, exponent: f64) -> [f64; N] {
     let squares = std::array::from_fn(|l| difference[l].mul_add(difference[l], knee * knee));

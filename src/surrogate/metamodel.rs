@@ -184,14 +184,24 @@ pub struct Metamodel {
 }
 
 impl Metamodel {
-    /// Every term reads a mode the file has, and a file whose models read the dampers' law carries
-    /// it, with a knee for every mode: what the free run indexes by.
+    /// Every term reads a mode the file has, every damper term a velocity of steps already run, and
+    /// a file whose models read the dampers' law carries it, with a knee for every mode: what the
+    /// free run indexes by.
     fn check_terms(&self) -> Result<()> {
         let modes = self.models.len();
         if let Some(term) =
             self.models.iter().flat_map(|m| &m.terms).find(|t| t.output_mode.is_some_and(|j| j >= modes))
         {
             return Err(Error::invalid("metamodel", format!("the term {term} reads a mode the file does not have")));
+        }
+        // A velocity is a first difference of steps already run; the free run computes each step's
+        // secants before the step's outputs.
+        if let Some(term) = self.models.iter().flat_map(|m| &m.terms).find(|t| t.damper.is_some() && t.output_lag == 0)
+        {
+            return Err(Error::invalid(
+                "metamodel",
+                format!("the damper term {term} reads a lag of 0; they start at 1"),
+            ));
         }
         let reads_law = self.models.iter().flat_map(|m| &m.terms).any(|t| t.damper.is_some());
         match &self.damper_law {

@@ -455,8 +455,9 @@ fn winds_outside_the_design_continue_the_expansions_linearly_in_ln_v() {
     assert!(report.median_peak_relative_error < 0.0125, "median peak error {}", report.median_peak_relative_error);
 }
 
-/// A metamodel file whose terms read a mode it does not have, or the dampers' law it does not
-/// carry, is refused by name when read, not found out by a panic in the free run.
+/// A metamodel file whose terms read a mode it does not have, a damper's velocity at a lag of 0,
+/// or the dampers' law it does not carry, is refused by name when read, not found out by a panic
+/// (or a stale value) in the free run.
 #[test]
 fn files_whose_terms_cannot_run_are_refused() {
     let (metamodel, _) = fixture::metamodel();
@@ -479,6 +480,15 @@ fn files_whose_terms_cannot_run_are_refused() {
             )
         },
         "reads a mode the file does not have",
+    );
+    refused(
+        &|v| {
+            push_term(
+                v,
+                serde_json::json!({"output_lag": 0, "output_power": 1, "input_lag": 0, "input_power": 0, "damper": "law"}),
+            )
+        },
+        "reads a lag of 0",
     );
     // The fixture's models have the dampers' law among their terms.
     refused(&|v| v["damper_law"] = Value::Null, "no damper_law");

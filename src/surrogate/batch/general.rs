@@ -8,7 +8,7 @@ use super::inputs::{Prepared, interpolate, splat_weights};
 use super::samples::longest_lag;
 use super::sink::{BLOCK, Divergence, Sink, first_divergence};
 use crate::simd::{LANES, Lanes};
-use crate::surrogate::damper_law::{law_lanes, secant_lanes};
+use crate::surrogate::damper_law::secant_lanes;
 use crate::surrogate::narx::DamperTerm;
 
 /// A term with its sources resolved and its coefficient in every lane.
@@ -23,15 +23,25 @@ struct Term {
     coefficient: Lanes,
 }
 
-/// A damper term: c·D(Δ_source), or with `modulated` c·Δ_own·S(Δ_source), Δ the first difference
-/// at `lag` and the law's knee the source mode's.
+/// A damper term: c·D(Δ_source) = c·Δ_source·S(Δ_source), or with `modulated` c·Δ_own·S(Δ_source),
+/// Δ the first difference at `lag`; S is the step's secant number `secant` of
+/// [`TermLists::secants`].
 #[derive(Debug, Clone, Copy)]
 struct LawTerm {
     source: usize,
     modulated: bool,
     lag: usize,
-    knee: f64,
+    secant: usize,
     coefficient: Lanes,
+}
+
+/// A secant S(Δ) the damper terms of a step read: of mode `source`'s first difference at `lag`,
+/// with that mode's knee.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Secant {
+    source: usize,
+    lag: usize,
+    knee: f64,
 }
 
 /// The batch's models as lists of terms, sorted by what they read.
@@ -45,6 +55,10 @@ pub(super) struct TermLists {
     feedback: Vec<Vec<Term>>,
     /// Per mode, the terms of the dampers' law.
     damper: Vec<Vec<LawTerm>>,
+    /// The distinct secants the damper terms read, each computed once a step: the default
+    /// structures read mode 1's at lag 1 in every mode (D(y1), Δy·S(y1)), and a power is the
+    /// costliest operation of the recursion.
+    secants: Vec<Secant>,
     /// The dampers' exponent α (unused without damper terms).
     exponent: f64,
     /// Longest lag: the steps each block carries over from the one before.
@@ -60,6 +74,7 @@ impl TermLists {
             linear: vec![Vec::new(); modes],
             feedback: vec![Vec::new(); modes],
             damper: vec![Vec::new(); modes],
+            secants: Vec::new(),
             exponent: programs.iter().find_map(|p| p.law).map_or(1.0, |law| law.exponent),
             history: longest_lag(programs),
         };
@@ -75,11 +90,16 @@ impl TermLists {
                 };
                 if let Some(kind) = t.damper {
                     let law = program.law.expect("a damper term runs with its damper law");
+                    let secant = Secant { source: term.source, lag: t.output_lag, knee: law.knees[term.source] };
+                    let index = lists.secants.iter().position(|s| *s == secant).unwrap_or_else(|| {
+                        lists.secants.push(secant);
+                        lists.secants.len() - 1
+                    });
                     lists.damper[m].push(LawTerm {
                         source: term.source,
                         modulated: kind == DamperTerm::Modulated && term.source != m,
                         lag: t.output_lag,
-                        knee: law.knees[term.source],
+                        secant: index,
                         coefficient: term.coefficient,
                     });
                     continue;
@@ -153,8 +173,18 @@ pub(super) fn run(lists: &TermLists, prepared: &Prepared, sink: &mut Sink) -> Re
 fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: usize, len: usize) {
     let modes = lists.linear.len();
     let h = lists.history;
+    let mut secants = vec![[0.0; LANES]; lists.secants.len()];
     for i in from..len {
         let here = (h + i) * modes;
+        // Damper terms read earlier steps only (lag ≥ 1), so the step's secants come first.
+        for (value, secant) in secants.iter_mut().zip(&lists.secants) {
+            let (near, far) = (
+                &outputs[here - secant.lag * modes + secant.source],
+                &outputs[here - (secant.lag + 1) * modes + secant.source],
+            );
+            let difference: Lanes = std::array::from_fn(|l| near[l] - far[l]);
+            *value = secant_lanes(difference, secant.knee, lists.exponent);
+        }
         for m in 0..modes {
             let mut value = [0.0; LANES];
             for term in &lists.exogenous[m] {
@@ -176,13 +206,13 @@ fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: 
             for term in &lists.damper[m] {
                 let (near, far) = (here - term.lag * modes, here - (term.lag + 1) * modes);
                 let (source_near, source_far) = (&outputs[near + term.source], &outputs[far + term.source]);
-                let source_difference: Lanes = std::array::from_fn(|l| source_near[l] - source_far[l]);
-                let g = if term.modulated {
+                let secant = &secants[term.secant];
+                // Δ·S(Δ) is the law D(Δ), lane by lane `DamperLaw::value` to the bit.
+                let g: Lanes = if term.modulated {
                     let (own_near, own_far) = (&outputs[near + m], &outputs[far + m]);
-                    let secants = secant_lanes(source_difference, term.knee, lists.exponent);
-                    std::array::from_fn(|l| (own_near[l] - own_far[l]) * secants[l])
+                    std::array::from_fn(|l| (own_near[l] - own_far[l]) * secant[l])
                 } else {
-                    law_lanes(source_difference, term.knee, lists.exponent)
+                    std::array::from_fn(|l| (source_near[l] - source_far[l]) * secant[l])
                 };
                 for l in 0..LANES {
                     value[l] = term.coefficient[l].mul_add(g[l], value[l]);
