@@ -13,7 +13,7 @@
 //! decides convergence is exact.
 
 use super::factored::{Curvature, FactoredModel};
-use super::power::power;
+use super::power::{power, sign_power};
 use crate::error::{Error, Result};
 use crate::linalg::{dot, multiply_into};
 use crate::structure::Structure;
@@ -85,9 +85,9 @@ impl Dampers {
         self.coefficients.is_empty()
     }
 
-    /// Axial force of damper d at axial velocity v.
+    /// Axial force of damper d at axial velocity v, by the power the solve uses.
     pub fn force(&self, d: usize, v: f64) -> f64 {
-        self.coefficients[d] * v.signum() * v.abs().powf(self.exponent)
+        self.coefficients[d] * sign_power(v, self.exponent)
     }
 
     /// Damper velocities as combinations of modal velocities: G = B Φ.

@@ -335,10 +335,11 @@ impl Metamodel {
         };
         let options = &self.calibration.options;
         let covered = speeds_of(options)?;
-        let input_model = match options.cover_wind_speeds {
-            Some(_) => speeds_of(&super::CalibrationOptions { cover_wind_speeds: None, ..options.clone() })?,
-            None => covered.clone(),
+        let uncovered = match options.cover_wind_speeds {
+            Some(_) => Some(speeds_of(&super::CalibrationOptions { cover_wind_speeds: None, ..options.clone() })?),
+            None => None,
         };
+        let input_model = uncovered.as_ref().unwrap_or(&covered);
         let marginal = &study.inputs.inputs[index].marginal;
         let at = |speed: f64| SpeedGerm { speed, germ: marginal.to_standard(speed) };
         let lowest = at(input_model.first()?.max(*covered.first()?));

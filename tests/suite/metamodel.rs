@@ -12,8 +12,8 @@ use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
 use windmeta::analysis::{
-    Response, ResponseKind, ResponseView, STANDARD_GRAVITY, exceedance_curve, metamodel_demands, metamodel_peaks,
-    validate,
+    Response, ResponseKind, ResponseView, STANDARD_GRAVITY, ValidationReport, exceedance_curve, metamodel_demands,
+    metamodel_peaks, validate,
 };
 use windmeta::dynamics::{ModalMotion, SampleModel};
 use windmeta::progress::Silent;
@@ -270,27 +270,41 @@ fn batched_peaks_equal_the_peaks_of_the_histories() {
     }
 }
 
+/// A 32-experiment design of 120 s storms (seed 1) covering `lower`-`upper` m/s, calibrated: the
+/// study, the metamodel, its design's range of wind speeds and the plain fixture's.
+fn covering_calibration(lower: f64, upper: f64) -> (Study, Metamodel, [f64; 2], [f64; 2]) {
+    let study = Study::preset("frame40-kn").unwrap().with_storm(120.0, 0.01).unwrap();
+    let options = CalibrationOptions {
+        experiments: 32,
+        seed: 1,
+        cover_wind_speeds: Some(WindCoverage { lower, upper }),
+        ..Default::default()
+    };
+    let metamodel = calibrate(&study, &options, &Silent).unwrap();
+    let covered = metamodel.calibrated_range(&study, "wind_speed").unwrap();
+    let plain = fixture::metamodel().0.calibrated_range(&study, "wind_speed").unwrap();
+    (study, metamodel, covered, plain)
+}
+
+/// Validates on 12 storms (seed 5) with the wind held at `speed`, against the loose targets the
+/// input model meets: peak correlation above 0.95, median peak error below 2 %.
+fn valid_at_held_speed(metamodel: &Metamodel, study: &Study, speed: f64) -> ValidationReport {
+    let held = study.inputs.clone().with_fixed("wind_speed", speed).unwrap();
+    let report = validate(metamodel, study, &held, 12, 5, &Silent).unwrap();
+    assert_eq!(report.fixed.get("wind_speed"), Some(&speed));
+    assert!(report.peak_correlation > 0.95, "peak correlation {}", report.peak_correlation);
+    assert!(report.median_peak_relative_error < 0.02, "median peak error {}", report.median_peak_relative_error);
+    report
+}
+
 /// A calibration asked to cover 30-60 m/s puts experiments up to 60 m/s (the input model's own
 /// design stops near 40 at this size), and validated there, with the wind held at the range's upper
 /// end, the metamodel meets the same loose targets as on the input model.
 #[test]
 fn a_covering_calibration_is_calibrated_and_valid_at_its_upper_end() {
-    let study = Study::preset("frame40-kn").unwrap().with_storm(120.0, 0.01).unwrap();
-    let options = CalibrationOptions {
-        experiments: 32,
-        seed: 1,
-        cover_wind_speeds: Some(WindCoverage { lower: 30.0, upper: 60.0 }),
-        ..Default::default()
-    };
-    let metamodel = calibrate(&study, &options, &Silent).unwrap();
-    let [low, high] = metamodel.calibrated_range(&study, "wind_speed").unwrap();
-    let [_, plain_high] = fixture::metamodel().0.calibrated_range(&study, "wind_speed").unwrap();
+    let (study, metamodel, [low, high], [_, plain_high]) = covering_calibration(30.0, 60.0);
     assert!(high > 58.0 && plain_high < 45.0 && low < 30.0, "covered [{low}, {high}], plain up to {plain_high}");
-    let at_end = study.inputs.clone().with_fixed("wind_speed", 60.0).unwrap();
-    let report = validate(&metamodel, &study, &at_end, 12, 5, &Silent).unwrap();
-    assert_eq!(report.fixed.get("wind_speed"), Some(&60.0));
-    assert!(report.peak_correlation > 0.95, "peak correlation {}", report.peak_correlation);
-    assert!(report.median_peak_relative_error < 0.02, "median peak error {}", report.median_peak_relative_error);
+    valid_at_held_speed(&metamodel, &study, 60.0);
 }
 
 /// A calibration asked to cover speeds below the input model's own range puts experiments there,
@@ -301,21 +315,9 @@ fn a_covering_calibration_is_calibrated_and_valid_at_its_upper_end() {
 /// of a full-size design covering 18-62 m/s was 2.5 times the reference's).
 #[test]
 fn a_covering_calibration_below_the_input_model_is_valid_at_its_lower_end() {
-    let study = Study::preset("frame40-kn").unwrap().with_storm(120.0, 0.01).unwrap();
-    let options = CalibrationOptions {
-        experiments: 32,
-        seed: 1,
-        cover_wind_speeds: Some(WindCoverage { lower: 16.0, upper: 40.0 }),
-        ..Default::default()
-    };
-    let metamodel = calibrate(&study, &options, &Silent).unwrap();
-    let [low, _] = metamodel.calibrated_range(&study, "wind_speed").unwrap();
-    let [plain_low, _] = fixture::metamodel().0.calibrated_range(&study, "wind_speed").unwrap();
+    let (study, metamodel, [low, _], [plain_low, _]) = covering_calibration(16.0, 40.0);
     assert!(low < 17.0 && plain_low > 20.0, "covered from {low}, plain from {plain_low}");
-    let at_end = study.inputs.clone().with_fixed("wind_speed", 17.0).unwrap();
-    let report = validate(&metamodel, &study, &at_end, 12, 5, &Silent).unwrap();
-    assert!(report.peak_correlation > 0.95, "peak correlation {}", report.peak_correlation);
-    assert!(report.median_peak_relative_error < 0.02, "median peak error {}", report.median_peak_relative_error);
+    let report = valid_at_held_speed(&metamodel, &study, 17.0);
     let acceleration =
         report.responses.iter().find(|r| r.response == ResponseKind::Acceleration).expect("acceleration validated");
     let ratio = acceleration.mean_metamodel_peak / acceleration.mean_reference_peak;

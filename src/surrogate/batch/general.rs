@@ -24,11 +24,10 @@ struct Term {
 }
 
 /// A damper term: c·D(Δ_source) = c·Δ_source·S(Δ_source), or with `modulated` c·Δ_own·S(Δ_source),
-/// Δ the first difference at `lag`; S is the step's secant number `secant` of
+/// Δ the first difference at `lag`; Δ_source and S are the step's number `secant` of
 /// [`TermLists::secants`].
 #[derive(Debug, Clone, Copy)]
 struct LawTerm {
-    source: usize,
     modulated: bool,
     lag: usize,
     secant: usize,
@@ -96,7 +95,6 @@ impl TermLists {
                         lists.secants.len() - 1
                     });
                     lists.damper[m].push(LawTerm {
-                        source: term.source,
                         modulated: kind == DamperTerm::Modulated && term.source != m,
                         lag: t.output_lag,
                         secant: index,
@@ -126,6 +124,7 @@ pub(super) fn run(lists: &TermLists, prepared: &Prepared, sink: &mut Sink) -> Re
     let h = lists.history;
     let mut inputs: Vec<Lanes> = vec![[0.0; LANES]; (h + BLOCK) * modes];
     let mut outputs: Vec<Lanes> = (0..(h + BLOCK) * modes).map(|k| rests[k % modes]).collect();
+    let mut laws = vec![([0.0; LANES], [0.0; LANES]); lists.secants.len()];
     let mut first = 0;
     while first < steps {
         let len = BLOCK.min(steps - first);
@@ -141,7 +140,7 @@ pub(super) fn run(lists: &TermLists, prepared: &Prepared, sink: &mut Sink) -> Re
                 }
             },
         );
-        step_block(lists, &inputs, &mut outputs, usize::from(first == 0), len);
+        step_block(lists, &inputs, &mut outputs, &mut laws, usize::from(first == 0), len);
         let block = &outputs[h * modes..(h + len) * modes];
         let block_inputs = &inputs[h * modes..(h + len) * modes];
         // Checked once a block, so that the lanes never branch apart inside the recursion.
@@ -167,23 +166,30 @@ pub(super) fn run(lists: &TermLists, prepared: &Prepared, sink: &mut Sink) -> Re
     Ok(())
 }
 
-/// Steps `from..len` of a block: each mode's input terms first (off the recursion's critical
-/// path), then its output terms.
+/// Steps `from..len` of a block: the step's source velocities and their secants first
+/// (`laws`, one per [`TermLists::secants`], kept by the caller), then each mode's input terms
+/// (off the recursion's critical path), then its output terms.
 #[inline(always)]
-fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: usize, len: usize) {
+fn step_block(
+    lists: &TermLists,
+    inputs: &[Lanes],
+    outputs: &mut [Lanes],
+    laws: &mut [(Lanes, Lanes)],
+    from: usize,
+    len: usize,
+) {
     let modes = lists.linear.len();
     let h = lists.history;
-    let mut secants = vec![[0.0; LANES]; lists.secants.len()];
     for i in from..len {
         let here = (h + i) * modes;
         // Damper terms read earlier steps only (lag ≥ 1), so the step's secants come first.
-        for (value, secant) in secants.iter_mut().zip(&lists.secants) {
+        for ((difference, value), secant) in laws.iter_mut().zip(&lists.secants) {
             let (near, far) = (
                 &outputs[here - secant.lag * modes + secant.source],
                 &outputs[here - (secant.lag + 1) * modes + secant.source],
             );
-            let difference: Lanes = std::array::from_fn(|l| near[l] - far[l]);
-            *value = secant_lanes(difference, secant.knee, lists.exponent);
+            *difference = std::array::from_fn(|l| near[l] - far[l]);
+            *value = secant_lanes(*difference, secant.knee, lists.exponent);
         }
         for m in 0..modes {
             let mut value = [0.0; LANES];
@@ -204,15 +210,13 @@ fn step_block(lists: &TermLists, inputs: &[Lanes], outputs: &mut [Lanes], from: 
                 }
             }
             for term in &lists.damper[m] {
-                let (near, far) = (here - term.lag * modes, here - (term.lag + 1) * modes);
-                let (source_near, source_far) = (&outputs[near + term.source], &outputs[far + term.source]);
-                let secant = &secants[term.secant];
+                let (source_difference, secant) = &laws[term.secant];
                 // Δ·S(Δ) is the law D(Δ), lane by lane `DamperLaw::value` to the bit.
                 let g: Lanes = if term.modulated {
-                    let (own_near, own_far) = (&outputs[near + m], &outputs[far + m]);
-                    std::array::from_fn(|l| (own_near[l] - own_far[l]) * secant[l])
+                    let (near, far) = (here - term.lag * modes + m, here - (term.lag + 1) * modes + m);
+                    std::array::from_fn(|l| (outputs[near][l] - outputs[far][l]) * secant[l])
                 } else {
-                    std::array::from_fn(|l| (source_near[l] - source_far[l]) * secant[l])
+                    std::array::from_fn(|l| source_difference[l] * secant[l])
                 };
                 for l in 0..LANES {
                     value[l] = term.coefficient[l].mul_add(g[l], value[l]);
