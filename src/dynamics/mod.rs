@@ -5,11 +5,13 @@ mod damper;
 mod factored;
 mod full;
 mod modal;
+mod modal_lanes;
 mod motion;
 mod power;
 
 pub use damper::{Dampers, ImplicitDamperSolve};
 pub use full::{FloorResponse, FullSystem, integrate_full};
 pub use modal::{ModalResponse, integrate_reduced};
+pub use modal_lanes::{ReducedStorm, integrate_reduced_lanes};
 pub use motion::{ModalMotion, SampleModel};
 pub use power::{power, power_lanes, sign_power};

@@ -39,14 +39,14 @@ impl ModalResponse {
 
 /// Step coefficients of one mode: state transition E and load integrals Γ₀, Γ₁ (2-vectors).
 #[derive(Debug, Clone, Copy)]
-struct StepCoefficients {
-    e: [[f64; 2]; 2],
-    gamma0: [f64; 2],
-    gamma1: [f64; 2],
+pub(super) struct StepCoefficients {
+    pub(super) e: [[f64; 2]; 2],
+    pub(super) gamma0: [f64; 2],
+    pub(super) gamma1: [f64; 2],
 }
 
 impl StepCoefficients {
-    fn new(omega: f64, zeta: f64, dt: f64) -> Self {
+    pub(super) fn new(omega: f64, zeta: f64, dt: f64) -> Self {
         let mut z = [[0.0; 4]; 4];
         z[0][1] = dt;
         z[1][0] = -omega * omega * dt;

@@ -12,6 +12,7 @@ use super::supervision::{Supervision, blocking, through_faults};
 use crate::analysis::{PairedPeak, PairedRuns, ReferenceRunner, Response};
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress};
+use crate::simd::LANES;
 use crate::study::Order;
 use crate::surrogate::phases::{CalibrationPlan, fit_experiments};
 use serde::{Deserialize, Serialize};
@@ -20,13 +21,15 @@ use std::sync::atomic::{AtomicI64, Ordering};
 use std::time::Duration;
 use tracing::Instrument;
 
-/// Experiments per task: large enough that a task's overhead (rebuilding the study, a lease) is
-/// small against its work, small enough that a full-size calibration has tasks for every replica.
-pub(super) const EXPERIMENTS_PER_TASK: usize = 10;
+/// Experiments per task: one batch of the reference's vector lanes (a task of ten ran eight in
+/// lanes and two in a batch of their own at the cost of eight), large enough that a task's
+/// overhead (rebuilding the study, a lease) is small against its work, small enough that a
+/// full-size calibration has tasks for every replica.
+pub(super) const EXPERIMENTS_PER_TASK: usize = LANES;
 
 /// Reference storms per task: a storm through both models costs about one calibration
 /// experiment (a reference integration), so as many as a chunk of experiments.
-const REFERENCE_STORMS_PER_TASK: usize = 10;
+const REFERENCE_STORMS_PER_TASK: usize = LANES;
 
 /// A task as queued.
 #[derive(Debug, Serialize, Deserialize)]

@@ -23,9 +23,9 @@ use super::narx::relative_error;
 use super::options::CalibrationOptions;
 use super::pce::SparsePce;
 use super::refine::{RefinementOutcome, RefinementSummary, refine};
-use crate::dynamics::integrate_reduced;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, check};
+use crate::simd::LANES;
 use crate::study::Study;
 use crate::wind::TransformWorkspace;
 use rayon::prelude::*;
@@ -96,26 +96,40 @@ struct Experiment {
 const DAMPING_FLOOR_SHARE: f64 = 0.5;
 
 impl Experiment {
-    /// Runs experiment `k` of the design through the reduced-order reference.
-    fn run(
+    /// Runs experiments `indices` of `design` through the reduced-order reference, eight at a
+    /// time in vector lanes.
+    fn run_batch(
         study: &Study,
         options: &CalibrationOptions,
-        x: &[f64],
-        k: usize,
+        design: &[Vec<f64>],
+        indices: &[usize],
         workspace: &mut TransformWorkspace,
         observer: &dyn Observer,
-    ) -> Result<Experiment> {
-        let (p, coarse) = study.sample_storm(x, options.wind, options.seed, k, workspace)?;
-        let forces = coarse.on_grid(&study.storm);
-        let dampers = study.dampers(&p)?;
-        let modes = study.sample_modes(&p);
-        let response = integrate_reduced(&modes, p.damping_ratio, &dampers, &forces, study.storm.time_step, observer)?;
-        let damping_floors = modes
-            .frequencies
+    ) -> Result<Vec<Experiment>> {
+        let samples = indices
             .iter()
-            .map(|omega| DAMPING_FLOOR_SHARE * -(-2.0 * p.damping_ratio * omega * study.storm.time_step).exp_m1())
+            .map(|&k| {
+                let x = design.get(k).ok_or_else(|| Error::invalid("experiment", format!("no experiment {k}")))?;
+                let (p, coarse) = study.sample_storm(x, options.wind, options.seed, k, workspace)?;
+                Ok((p, coarse.on_grid(&study.storm)))
+            })
+            .collect::<Result<Vec<_>>>()?;
+        let responses = study.integrate_reduced_batch(&samples, observer)?;
+        let dt = study.storm.time_step;
+        let experiments = samples
+            .into_iter()
+            .zip(responses)
+            .map(|((p, forces), response)| {
+                let damping_floors = study
+                    .sample_modes(&p)
+                    .frequencies
+                    .iter()
+                    .map(|omega| DAMPING_FLOOR_SHARE * -(-2.0 * p.damping_ratio * omega * dt).exp_m1())
+                    .collect();
+                Experiment { q: forces.series, q_mean: forces.mean, y: response.displacements, damping_floors }
+            })
             .collect();
-        Ok(Experiment { q: forces.series, q_mean: forces.mean, y: response.displacements, damping_floors })
+        Ok(experiments)
     }
 
     /// Every mode's record, scaled as the plan says; with coupling each shares all modes' outputs.
@@ -208,15 +222,18 @@ pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer
     let selection: Vec<usize> =
         (0..options.selection_experiments.min(k)).map(|i| (i as f64 * stride) as usize).collect();
     let done = AtomicUsize::new(0);
-    let experiments: Vec<Experiment> = selection
-        .par_iter()
-        .map_init(TransformWorkspace::default, |workspace, &i| {
+    let experiments: Vec<Vec<Experiment>> = selection
+        .par_chunks(LANES)
+        .map_init(TransformWorkspace::default, |workspace, chunk| {
             check(observer)?;
-            let experiment = Experiment::run(study, options, &design[i], i, workspace, observer)?;
-            observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: k });
-            Ok(experiment)
+            let experiments = Experiment::run_batch(study, options, &design, chunk, workspace, observer)?;
+            for _ in chunk {
+                observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: k });
+            }
+            Ok(experiments)
         })
         .collect::<Result<_>>()?;
+    let experiments: Vec<Experiment> = experiments.into_iter().flatten().collect();
     let mut seconds = StageSeconds { experiments: started.elapsed().as_secs_f64(), ..Default::default() };
     // The NARX works on deviations from the static state at rest under the mean load: y′ = y − y(0),
     // Q′ = Q − Q̄. Polynomial terms then act on the fluctuation, and the static level (a smooth
@@ -285,16 +302,23 @@ pub fn fit_experiments(
 ) -> Result<Vec<ExperimentFit>> {
     let done = AtomicUsize::new(done_before);
     let total = plan.design.len();
-    indices
-        .par_iter()
-        .map_init(TransformWorkspace::default, |workspace, &k| {
+    let fits: Vec<Vec<ExperimentFit>> = indices
+        .par_chunks(LANES)
+        .map_init(TransformWorkspace::default, |workspace, chunk| {
             check(observer)?;
-            let x = plan.design.get(k).ok_or_else(|| Error::invalid("experiment", format!("no experiment {k}")))?;
-            let fit = Experiment::run(study, options, x, k, workspace, observer)?.fit(k, plan, options, observer)?;
-            observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
-            Ok(fit)
+            let experiments = Experiment::run_batch(study, options, &plan.design, chunk, workspace, observer)?;
+            experiments
+                .iter()
+                .zip(chunk)
+                .map(|(experiment, &k)| {
+                    let fit = experiment.fit(k, plan, options, observer)?;
+                    observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
+                    Ok(fit)
+                })
+                .collect()
         })
-        .collect()
+        .collect::<Result<_>>()?;
+    Ok(fits.into_iter().flatten().collect())
 }
 
 /// Phase 3: the expansions of every experiment's coefficients and static level over the inputs,

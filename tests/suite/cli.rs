@@ -230,6 +230,8 @@ fn bench_reports_rows_and_headline_figures() {
         "400",
         "--sensitivity-samples",
         "16",
+        "--reference-storms",
+        "8",
         "--repetitions",
         "1",
         "--json",
@@ -253,6 +255,20 @@ fn bench_reports_rows_and_headline_figures() {
     assert!(stage("drift profile, every floor") > 0.0 && stage("acceleration profile, every floor") > 0.0);
     assert!(stage("hazard curve, 400 storms, 10 return periods") > 0.0);
     assert!(stage("Sobol indices, N = 16") > 0.0);
+    assert!(stage("certified exceedance curve, 16 samples, 8 reduced-order reference storms") > 0.0);
+    assert!(stage("roof acceleration at 5 m/s exceedance peaks, 16 samples") > 0.0);
+    let lanes = report["reference_lanes_speedup"].as_f64().unwrap();
+    let (alone, in_lanes) = (
+        stage("per sample: reduced-order reference, 8 storms of a design one at a time"),
+        stage("per sample: reduced-order reference, the same 8 storms in vector lanes"),
+    );
+    assert!((lanes - alone / in_lanes).abs() <= 1e-9 * lanes);
+    // Every target is reported with its figure, and none is judged at sizes it was not set for.
+    let targets = report["targets"].as_array().unwrap();
+    assert_eq!(targets.len(), 11, "{targets:?}");
+    assert!(targets.iter().all(|t| t["met"].is_null() && t["measured"].as_f64().unwrap() > 0.0), "{targets:?}");
+    let calibration = targets.iter().find(|t| t["figure"] == "calibration, K = 24").unwrap();
+    assert_eq!(calibration["measured"].as_f64().unwrap(), stage("calibration, K = 24"));
     refused(&["bench", "--preset", "frame41"], "unknown preset");
 }
 

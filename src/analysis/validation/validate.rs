@@ -9,9 +9,10 @@ use crate::analysis::responses::response::ResponseView;
 use crate::analysis::sampling::exceedance::{
     ExceedanceCurve, automatic_thresholds, exceedance_curve, max_exceedance_gap,
 };
-use crate::dynamics::{ModalMotion, SampleModel, integrate_reduced};
+use crate::dynamics::{ModalMotion, SampleModel};
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, check};
+use crate::simd::LANES;
 use crate::study::Study;
 use crate::surrogate::Metamodel;
 use crate::surrogate::narx::relative_error;
@@ -107,46 +108,66 @@ pub fn validate(
     let roof = Response::Displacement { floor: study.structure.floors() };
     let shapes = &metamodel.modes.shapes;
     let done = AtomicUsize::new(0);
-    let results: Vec<SampleResult> = xs
-        .par_iter()
+    let results: Vec<Vec<SampleResult>> = xs
+        .par_chunks(LANES)
         .enumerate()
-        .map_init(TransformWorkspace::default, |workspace, (k, x)| {
+        .map_init(TransformWorkspace::default, |workspace, (chunk, xs)| {
             check(observer)?;
-            let (p, coarse) = study.sample_storm(x, path, seed, k, workspace)?;
-            let forces = coarse.on_grid(&study.storm);
-            let (modes, dampers) = (study.sample_modes(&p), study.dampers(&p)?);
+            // The chunk's storms through the reduced reference together, in vector lanes.
+            let first = chunk * LANES;
+            let storms = xs
+                .iter()
+                .enumerate()
+                .map(|(i, x)| {
+                    let (p, coarse) = study.sample_storm(x, path, seed, first + i, workspace)?;
+                    Ok((p, coarse.on_grid(&study.storm)))
+                })
+                .collect::<Result<Vec<_>>>()?;
             let started = Instant::now();
-            let reference =
-                integrate_reduced(&modes, p.damping_ratio, &dampers, &forces, study.storm.time_step, observer)?;
-            let reference_seconds = started.elapsed().as_secs_f64();
-            let started = Instant::now();
-            let predicted = metamodel
-                .predict(study, x, &forces)
-                .map_err(|e| Error::Numerical(format!("validation sample {k}: {e}")))?;
-            let metamodel_seconds = started.elapsed().as_secs_f64();
-            let mode_errors: Vec<f64> =
-                reference.displacements.iter().zip(&predicted).map(|(y, y_hat)| relative_error(y, y_hat)).collect();
-            let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
-            let reference = reference.motion();
-            let predicted = ModalMotion::from_displacements(predicted, study.storm.time_step);
-            let structure = &study.structure;
-            let reference_view =
-                ResponseView::new(shapes, structure, &reference, &model, &forces, study.storm.time_step);
-            let metamodel_view =
-                ResponseView::new(shapes, structure, &predicted, &model, &forces, study.storm.time_step);
-            let (u, u_hat) = (roof.history(&reference_view)?, roof.history(&metamodel_view)?);
-            let result = SampleResult {
-                reference: CheckedPeaks::of(&reference_view)?,
-                metamodel: CheckedPeaks::of(&metamodel_view)?,
-                roof_error: relative_error(&u, &u_hat),
-                mode_errors,
-                reference_seconds,
-                metamodel_seconds,
-            };
-            observer.progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });
-            Ok(result)
+            let references = study.integrate_reduced_batch(&storms, observer)?;
+            let reference_seconds = started.elapsed().as_secs_f64() / xs.len() as f64;
+            xs.iter()
+                .zip(storms.iter().zip(references))
+                .enumerate()
+                .map(|(i, (x, ((p, forces), reference)))| {
+                    let k = first + i;
+                    let (modes, dampers) = (study.sample_modes(p), study.dampers(p)?);
+                    let started = Instant::now();
+                    let predicted = metamodel
+                        .predict(study, x, forces)
+                        .map_err(|e| Error::Numerical(format!("validation sample {k}: {e}")))?;
+                    let metamodel_seconds = started.elapsed().as_secs_f64();
+                    let mode_errors: Vec<f64> = reference
+                        .displacements
+                        .iter()
+                        .zip(&predicted)
+                        .map(|(y, y_hat)| relative_error(y, y_hat))
+                        .collect();
+                    let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
+                    let reference = reference.motion();
+                    let predicted = ModalMotion::from_displacements(predicted, study.storm.time_step);
+                    let structure = &study.structure;
+                    let reference_view =
+                        ResponseView::new(shapes, structure, &reference, &model, forces, study.storm.time_step);
+                    let metamodel_view =
+                        ResponseView::new(shapes, structure, &predicted, &model, forces, study.storm.time_step);
+                    let (u, u_hat) = (roof.history(&reference_view)?, roof.history(&metamodel_view)?);
+                    let result = SampleResult {
+                        reference: CheckedPeaks::of(&reference_view)?,
+                        metamodel: CheckedPeaks::of(&metamodel_view)?,
+                        roof_error: relative_error(&u, &u_hat),
+                        mode_errors,
+                        reference_seconds,
+                        metamodel_seconds,
+                    };
+                    observer
+                        .progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });
+                    Ok(result)
+                })
+                .collect()
         })
         .collect::<Result<_>>()?;
+    let results: Vec<SampleResult> = results.into_iter().flatten().collect();
     let n = results.len() as f64;
     let reference: Vec<CheckedPeaks> = results.iter().map(|r| r.reference.clone()).collect();
     let metamodel_peaks: Vec<CheckedPeaks> = results.iter().map(|r| r.metamodel.clone()).collect();
