@@ -522,9 +522,44 @@ mod tests {
         }
     }
 
+    /// A storm's answer does not depend on the batch it is in (what lets a service task of some
+    /// experiments give the one-process calibration's numbers to the bit): the third storm of a
+    /// batch of five and the same storm alone in a batch (its other lanes repeating it) agree bit
+    /// for bit.
+    #[test]
+    fn a_storm_does_not_depend_on_its_batch() {
+        let study = Study::preset("frame40-kn").unwrap().with_storm(60.0, 0.01).unwrap();
+        let design = latin_hypercube(&study.inputs, 5, &mut rng_from_seed(4));
+        let samples: Vec<_> = design
+            .iter()
+            .enumerate()
+            .map(|(k, x)| {
+                let p = study.parameters(x).unwrap();
+                let forces = study.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(k as u64)).unwrap();
+                (p, forces)
+            })
+            .collect();
+        let together = study.integrate_reduced_batch(&samples, &Silent).unwrap();
+        let alone = study.integrate_reduced_batch(&samples[2..3], &Silent).unwrap();
+        let bits = |series: &[Vec<f64>]| -> Vec<Vec<u64>> {
+            series.iter().map(|s| s.iter().map(|x| x.to_bits()).collect()).collect()
+        };
+        assert_eq!(bits(&together[2].displacements), bits(&alone[0].displacements));
+        assert_eq!(bits(&together[2].velocities), bits(&alone[0].velocities));
+    }
+
     /// A batch refuses storms of different shapes, and an empty one, naming the field.
     #[test]
     fn a_batch_of_mismatched_storms_is_refused() {
         assert!(integrate_reduced_lanes(&[], 0.01, &Silent).unwrap_err().to_string().contains("storms"));
+        let study = Study::preset("frame40-kn").unwrap().with_storm(10.0, 0.01).unwrap();
+        let p = study.parameters(&study.inputs.means()).unwrap();
+        let forces = study.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(1)).unwrap();
+        let mut shorter = forces.clone();
+        shorter.series.iter_mut().for_each(|series| series.truncate(100));
+        let (modes, dampers) = (study.sample_modes(&p), study.dampers(&p).unwrap());
+        let storm = |forces| ReducedStorm { modes: &modes, damping_ratio: p.damping_ratio, dampers: &dampers, forces };
+        let error = integrate_reduced_lanes(&[storm(&forces), storm(&shorter)], 0.01, &Silent).unwrap_err();
+        assert!(error.to_string().contains("storm 1 differs from the first"), "{error}");
     }
 }
