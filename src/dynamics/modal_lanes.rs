@@ -155,10 +155,8 @@ impl Batch {
         let mut v = vec![[0.0; LANES]; n];
         let mut load: Vec<Lanes> =
             (0..n).map(|m| from_fn(|l| storm_of(storms, l).forces.series[m][0] * self.inverse_masses[m][l])).collect();
-        let mut responses: Vec<ModalResponse> = storms
-            .iter()
-            .enumerate()
-            .map(|(l, _)| {
+        let mut responses: Vec<ModalResponse> = (0..storms.len())
+            .map(|l| {
                 let series = |first: &dyn Fn(usize) -> f64| -> Vec<Vec<f64>> {
                     (0..n)
                         .map(|m| {
@@ -174,6 +172,8 @@ impl Batch {
         let active = self.coefficients.iter().flatten().any(|&c| c > 0.0);
         let mut solve = LaneSolve::new(self);
         let mut known = vec![[[0.0; LANES]; 2]; n];
+        // Per mode, this step's modal force over the mass.
+        let mut next = vec![[0.0; LANES]; n];
         // Per mode, the modal damper force over the mass, g_m/M_m, of the last step.
         let mut damper_load = vec![[0.0; LANES]; n];
         let mut previous_load = vec![[0.0; LANES]; n];
@@ -182,15 +182,13 @@ impl Batch {
                 check(observer)?;
             }
             for m in 0..n {
-                let next: Lanes = from_fn(|l| storm_of(storms, l).forces.series[m][i] * self.inverse_masses[m][l]);
-                let (e, gd, g1) = (&self.transition[m], &self.gamma_difference[m], &self.gamma1[m]);
+                next[m] = from_fn(|l| storm_of(storms, l).forces.series[m][i] * self.inverse_masses[m][l]);
+                let (e, gd, g1, q) = (&self.transition[m], &self.gamma_difference[m], &self.gamma1[m], &next[m]);
                 known[m] = from_fn(|r| {
-                    from_fn(|l| {
-                        e[r][0][l] * y[m][l] + e[r][1][l] * v[m][l] + gd[r][l] * load[m][l] + g1[r][l] * next[l]
-                    })
+                    from_fn(|l| e[r][0][l] * y[m][l] + e[r][1][l] * v[m][l] + gd[r][l] * load[m][l] + g1[r][l] * q[l])
                 });
                 solve.a[m] = known[m][1];
-                // Predictor: the previous step's damper forces.
+                // Predictor: the damper forces extrapolated linearly from the last two steps.
                 let (now, before) = (&damper_load[m], &previous_load[m]);
                 solve.s[m] = from_fn(|l| known[m][1][l] - g1[1][l] * (2.0 * now[l] - before[l]));
             }
@@ -205,9 +203,7 @@ impl Batch {
                 let g1 = &self.gamma1[m];
                 y[m] = from_fn(|l| known[m][0][l] - g1[0][l] * damper_load[m][l]);
                 v[m] = from_fn(|l| known[m][1][l] - g1[1][l] * damper_load[m][l]);
-                load[m] = from_fn(|l| {
-                    storm_of(storms, l).forces.series[m][i] * self.inverse_masses[m][l] - damper_load[m][l]
-                });
+                load[m] = from_fn(|l| next[m][l] - damper_load[m][l]);
             }
             for (l, response) in responses.iter_mut().enumerate() {
                 for m in 0..n {
@@ -481,8 +477,22 @@ mod tests {
     use super::*;
     use crate::dynamics::integrate_reduced;
     use crate::progress::Silent;
-    use crate::study::{Study, WindPath};
+    use crate::study::{PhysicalParameters, Study, WindPath};
     use crate::uncertainty::{latin_hypercube, rng_from_seed};
+
+    /// Five storms of `study` at a Latin hypercube's inputs (drawn with `seed`), storm k's wind
+    /// from stream k: each sample's parameters and modal forces.
+    fn design_storms(study: &Study, seed: u64) -> Vec<(PhysicalParameters, ModalForces)> {
+        latin_hypercube(&study.inputs, 5, &mut rng_from_seed(seed))
+            .iter()
+            .enumerate()
+            .map(|(k, x)| {
+                let p = study.parameters(x).unwrap();
+                let forces = study.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(k as u64)).unwrap();
+                (p, forces)
+            })
+            .collect()
+    }
 
     /// Five storms of frame40-kn at inputs spread over their ranges (a batch with padded lanes),
     /// 120 s each, in lanes and one at a time: every modal displacement and velocity agrees to a
@@ -492,25 +502,12 @@ mod tests {
     #[test]
     fn lanes_give_the_one_storm_answers() {
         let study = Study::preset("frame40-kn").unwrap().with_storm(120.0, 0.01).unwrap();
-        let design = latin_hypercube(&study.inputs, 5, &mut rng_from_seed(3));
-        let samples: Vec<_> = design
-            .iter()
-            .enumerate()
-            .map(|(k, x)| {
-                let p = study.parameters(x).unwrap();
-                let forces = study.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(k as u64)).unwrap();
-                (study.sample_modes(&p), p.damping_ratio, study.dampers(&p).unwrap(), forces)
-            })
-            .collect();
-        let storms: Vec<ReducedStorm<'_>> = samples
-            .iter()
-            .map(|(modes, zeta, dampers, forces)| ReducedStorm { modes, damping_ratio: *zeta, dampers, forces })
-            .collect();
-        let lanes = integrate_reduced_lanes(&storms, 0.01, &Silent).unwrap();
+        let samples = design_storms(&study, 3);
+        let lanes = study.integrate_reduced_batch(&samples, &Silent).unwrap();
         assert_eq!(lanes.len(), 5);
-        for (storm, lane) in storms.iter().zip(&lanes) {
-            let alone = integrate_reduced(storm.modes, storm.damping_ratio, storm.dampers, storm.forces, 0.01, &Silent)
-                .unwrap();
+        for ((p, forces), lane) in samples.iter().zip(&lanes) {
+            let (modes, dampers) = (study.sample_modes(p), study.dampers(p).unwrap());
+            let alone = integrate_reduced(&modes, p.damping_ratio, &dampers, forces, 0.01, &Silent).unwrap();
             for (ours, theirs) in [(&lane.displacements, &alone.displacements), (&lane.velocities, &alone.velocities)] {
                 for (a, b) in ours.iter().zip(theirs) {
                     let size = b.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -529,16 +526,7 @@ mod tests {
     #[test]
     fn a_storm_does_not_depend_on_its_batch() {
         let study = Study::preset("frame40-kn").unwrap().with_storm(60.0, 0.01).unwrap();
-        let design = latin_hypercube(&study.inputs, 5, &mut rng_from_seed(4));
-        let samples: Vec<_> = design
-            .iter()
-            .enumerate()
-            .map(|(k, x)| {
-                let p = study.parameters(x).unwrap();
-                let forces = study.modal_forces(&p, WindPath::Modal, &mut rng_from_seed(k as u64)).unwrap();
-                (p, forces)
-            })
-            .collect();
+        let samples = design_storms(&study, 4);
         let together = study.integrate_reduced_batch(&samples, &Silent).unwrap();
         let alone = study.integrate_reduced_batch(&samples[2..3], &Silent).unwrap();
         let bits = |series: &[Vec<f64>]| -> Vec<Vec<u64>> {

@@ -54,6 +54,18 @@ pub struct StormRun {
 }
 
 impl StormRun {
+    /// A reduced-order run: its modal response, the forces that drove it and its costs.
+    fn reduced(response: ModalResponse, forces: ModalForces, wind_seconds: f64, integration_seconds: f64) -> Self {
+        StormRun {
+            roof: response.roof(),
+            modal_forces: Some(forces),
+            modal_motion: Some(response.motion()),
+            floor_motion: None,
+            wind_seconds,
+            integration_seconds,
+        }
+    }
+
     /// Peak absolute roof displacement (m).
     pub fn peak(&self) -> f64 {
         self.roof.iter().fold(0.0, |m, x| m.max(x.abs()))
@@ -114,14 +126,7 @@ impl Study {
                 let response =
                     integrate_reduced(&self.sample_modes(&p), p.damping_ratio, &dampers, &forces, dt, &Silent)?;
                 let integration_seconds = started.elapsed().as_secs_f64();
-                Ok(StormRun {
-                    roof: response.roof(),
-                    modal_forces: Some(forces),
-                    modal_motion: Some(response.motion()),
-                    floor_motion: None,
-                    wind_seconds,
-                    integration_seconds,
-                })
+                Ok(StormRun::reduced(response, forces, wind_seconds, integration_seconds))
             }
             Order::Full => {
                 let started = Instant::now();
@@ -203,14 +208,7 @@ impl Study {
         Ok(samples
             .into_iter()
             .zip(responses)
-            .map(|((_, forces), response)| StormRun {
-                roof: response.roof(),
-                modal_forces: Some(forces),
-                modal_motion: Some(response.motion()),
-                floor_motion: None,
-                wind_seconds,
-                integration_seconds,
-            })
+            .map(|((_, forces), response)| StormRun::reduced(response, forces, wind_seconds, integration_seconds))
             .collect())
     }
 }

@@ -9,15 +9,15 @@ use crate::analysis::responses::response::ResponseView;
 use crate::analysis::sampling::exceedance::{
     ExceedanceCurve, automatic_thresholds, exceedance_curve, max_exceedance_gap,
 };
-use crate::dynamics::{ModalMotion, SampleModel};
+use crate::dynamics::{ModalMotion, ModalResponse, SampleModel};
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, check};
 use crate::simd::LANES;
-use crate::study::Study;
+use crate::study::{PhysicalParameters, Study};
 use crate::surrogate::Metamodel;
 use crate::surrogate::narx::relative_error;
 use crate::uncertainty::{InputModel, Marginal, monte_carlo, rng_from_seed};
-use crate::wind::TransformWorkspace;
+use crate::wind::{ModalForces, TransformWorkspace};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
@@ -77,6 +77,52 @@ struct SampleResult {
     metamodel_seconds: f64,
 }
 
+/// What a validation sample is compared with: the metamodel, on the study's storms.
+struct Comparison<'a> {
+    metamodel: &'a Metamodel,
+    study: &'a Study,
+}
+
+impl Comparison<'_> {
+    /// Sample `k` (inputs `x`, parameters and modal forces `storm`) through the metamodel, against
+    /// its `reference` response, which took `reference_seconds`.
+    fn compare(
+        &self,
+        k: usize,
+        x: &[f64],
+        (p, forces): &(PhysicalParameters, ModalForces),
+        reference: ModalResponse,
+        reference_seconds: f64,
+    ) -> Result<SampleResult> {
+        let (study, dt) = (self.study, self.study.storm.time_step);
+        let (modes, dampers) = (study.sample_modes(p), study.dampers(p)?);
+        let started = Instant::now();
+        let predicted = self
+            .metamodel
+            .predict(study, x, forces)
+            .map_err(|e| Error::Numerical(format!("validation sample {k}: {e}")))?;
+        let metamodel_seconds = started.elapsed().as_secs_f64();
+        let mode_errors: Vec<f64> =
+            reference.displacements.iter().zip(&predicted).map(|(y, y_hat)| relative_error(y, y_hat)).collect();
+        let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
+        let reference = reference.motion();
+        let predicted = ModalMotion::from_displacements(predicted, dt);
+        let (shapes, structure) = (&self.metamodel.modes.shapes, &study.structure);
+        let reference_view = ResponseView::new(shapes, structure, &reference, &model, forces, dt);
+        let metamodel_view = ResponseView::new(shapes, structure, &predicted, &model, forces, dt);
+        let roof = Response::Displacement { floor: structure.floors() };
+        let (u, u_hat) = (roof.history(&reference_view)?, roof.history(&metamodel_view)?);
+        Ok(SampleResult {
+            reference: CheckedPeaks::of(&reference_view)?,
+            metamodel: CheckedPeaks::of(&metamodel_view)?,
+            roof_error: relative_error(&u, &u_hat),
+            mode_errors,
+            reference_seconds,
+            metamodel_seconds,
+        })
+    }
+}
+
 /// Runs `samples` fresh Monte Carlo samples of `inputs` (the study's input model, possibly with
 /// some inputs held) through the reference and the metamodel.
 pub fn validate(
@@ -105,8 +151,7 @@ pub fn validate(
         .collect();
     let xs = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let path = metamodel.calibration.options.wind;
-    let roof = Response::Displacement { floor: study.structure.floors() };
-    let shapes = &metamodel.modes.shapes;
+    let against = Comparison { metamodel, study };
     let done = AtomicUsize::new(0);
     let results: Vec<Vec<SampleResult>> = xs
         .par_chunks(LANES)
@@ -126,40 +171,10 @@ pub fn validate(
             let started = Instant::now();
             let references = study.integrate_reduced_batch(&storms, observer)?;
             let reference_seconds = started.elapsed().as_secs_f64() / xs.len() as f64;
-            xs.iter()
-                .zip(storms.iter().zip(references))
-                .enumerate()
-                .map(|(i, (x, ((p, forces), reference)))| {
-                    let k = first + i;
-                    let (modes, dampers) = (study.sample_modes(p), study.dampers(p)?);
-                    let started = Instant::now();
-                    let predicted = metamodel
-                        .predict(study, x, forces)
-                        .map_err(|e| Error::Numerical(format!("validation sample {k}: {e}")))?;
-                    let metamodel_seconds = started.elapsed().as_secs_f64();
-                    let mode_errors: Vec<f64> = reference
-                        .displacements
-                        .iter()
-                        .zip(&predicted)
-                        .map(|(y, y_hat)| relative_error(y, y_hat))
-                        .collect();
-                    let model = SampleModel::new(&modes, p.damping_ratio, &dampers);
-                    let reference = reference.motion();
-                    let predicted = ModalMotion::from_displacements(predicted, study.storm.time_step);
-                    let structure = &study.structure;
-                    let reference_view =
-                        ResponseView::new(shapes, structure, &reference, &model, forces, study.storm.time_step);
-                    let metamodel_view =
-                        ResponseView::new(shapes, structure, &predicted, &model, forces, study.storm.time_step);
-                    let (u, u_hat) = (roof.history(&reference_view)?, roof.history(&metamodel_view)?);
-                    let result = SampleResult {
-                        reference: CheckedPeaks::of(&reference_view)?,
-                        metamodel: CheckedPeaks::of(&metamodel_view)?,
-                        roof_error: relative_error(&u, &u_hat),
-                        mode_errors,
-                        reference_seconds,
-                        metamodel_seconds,
-                    };
+            let compared = xs.iter().zip(storms.iter().zip(references)).enumerate();
+            compared
+                .map(|(i, (x, (storm, reference)))| {
+                    let result = against.compare(first + i, x, storm, reference, reference_seconds)?;
                     observer
                         .progress(Progress::Samples { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: samples });
                     Ok(result)
