@@ -8,7 +8,7 @@
 //! ```
 
 use clap::Parser;
-use windmeta::analysis::{Draws, OnDivergence, Response, WIND_SPEED, metamodel_sensitivity, peaks_at};
+use windmeta::analysis::{Draws, OnDivergence, OnThisMachine, Response, WIND_SPEED, metamodel_sensitivity, peaks_at};
 use windmeta::progress::Silent;
 use windmeta::surrogate::Metamodel;
 use windmeta::uncertainty::{monte_carlo, rng_from_seed};
@@ -32,7 +32,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let metamodel = Metamodel::from_json(&std::fs::read_to_string(&args.model)?)?;
     let study = metamodel.study()?;
     let roof = Response::Displacement { floor: study.structure.floors() };
-    let sobol = metamodel_sensitivity(&metamodel, &study, roof, args.samples, 1, 0.95, &Silent)?;
+    let sobol = metamodel_sensitivity(&metamodel, &study, roof, args.samples, 1, 0.95, &OnThisMachine, &Silent)?;
     let wind = sobol.indices.iter().find(|i| i.name == WIND_SPEED).ok_or("the model has no random wind speed")?;
 
     let column = study.inputs.index_of(WIND_SPEED)?;
@@ -49,7 +49,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     }
     let storms: Vec<usize> = (0..rows.len()).collect();
     let draws = Draws { study: &study, rows: &rows, storms: &storms, seed: 3, on_divergence: OnDivergence::Fail };
-    let peaks = peaks_at(&metamodel, &draws, roof, &Silent)?;
+    let peaks = peaks_at(&metamodel, &draws, roof, &OnThisMachine, &Silent)?;
     let n = args.storms as f64;
     let mean = |x: &[f64]| x.iter().sum::<f64>() / x.len() as f64;
     let variance = |x: &[f64]| {

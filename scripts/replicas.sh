@@ -3,9 +3,10 @@
 # database, starts that many `windmeta serve` replicas on it (one worker each, each pinned to one
 # core with one rayon thread, so that a replica is a core), then through the first replica times a
 # calibration of `frame40-kn` and a certified exceedance curve on the metamodel it made, each from
-# its POST until its operation is done. A calibration's experiments and a certified answer's
-# reference storms are leased tasks that every replica's idle workers take, so these times should
-# fall as replicas are added (a calibration's structure selection runs in its job alone). Prints a
+# its POST until its operation is done. A calibration's structure selection (a task per mode),
+# experiments and expansions, and an answer's metamodel storms and reference storms, are leased
+# tasks that every replica's idle workers take, so these times should fall as replicas are added
+# (what is left in the job itself: the selection experiments and the plan's assembly). Prints a
 # Markdown table on standard output (progress on standard error) and, with --json, writes the same
 # as JSON with more detail. Stops every replica it started and drops every database it made, on
 # success, on failure and on Ctrl-C.

@@ -171,7 +171,8 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
 
     let roof = Response::Displacement { floor: study.structure.floors() };
     let exceedance = time(repetitions.min(3), |r| {
-        let peaks = metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, roof, &Silent)?;
+        let peaks =
+            metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, roof, &OnThisMachine, &Silent)?;
         Ok(exceedance_curve(&peaks, &automatic_thresholds(&peaks, 50), 0.95))
     })?;
     rows.push(row(
@@ -181,7 +182,8 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     ));
     let certify = CertifyOptions { reference_storms: args.reference_storms, order: Order::Reduced };
     let certified = time(repetitions.min(3), |r| {
-        let peaks = metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, roof, &Silent)?;
+        let peaks =
+            metamodel_peaks(&metamodel, &study, &study.inputs, args.samples, 1 + r, roof, &OnThisMachine, &Silent)?;
         let thresholds = automatic_thresholds(&peaks, 50);
         let inputs = &study.inputs;
         let runner = &OnThisMachine;
@@ -219,7 +221,7 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         (format!("roof acceleration at {CALM_WIND_SPEED} m/s"), Response::Acceleration { floor }, &calm),
     ] {
         let seconds = time(repetitions.min(3), |r| {
-            metamodel_peaks(&metamodel, &study, inputs, args.samples, 1 + r, response, &Silent)
+            metamodel_peaks(&metamodel, &study, inputs, args.samples, 1 + r, response, &OnThisMachine, &Silent)
         })?;
         rows.push(row(
             format!("{name} exceedance peaks, {} samples (all threads)", args.samples),
@@ -235,7 +237,8 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
     for kind in [ResponseKind::Drift, ResponseKind::Acceleration] {
         let profile = time(repetitions.min(3), |r| {
             let inputs = &study.inputs;
-            let samples = metamodel_profiles(&metamodel, &study, inputs, args.samples, 1 + r, kind, &Silent)?;
+            let samples =
+                metamodel_profiles(&metamodel, &study, inputs, args.samples, 1 + r, kind, &OnThisMachine, &Silent)?;
             samples.quantile_profile(0.5, 0.95)
         })?;
         rows.push(row(
@@ -308,8 +311,9 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
             confidence: 0.95,
         };
         let roof_acceleration = Response::Acceleration { floor: study.structure.floors() };
-        let swept =
-            time(repetitions.min(3), |_| metamodel_sweep(&metamodel, &study, roof_acceleration, &sweep, &Silent))?;
+        let swept = time(repetitions.min(3), |_| {
+            metamodel_sweep(&metamodel, &study, roof_acceleration, &sweep, &OnThisMachine, &Silent)
+        })?;
         rows.push(row(
             format!(
                 "sweep of {}, 5 values x {} storms, 10-year roof acceleration (all threads)",
@@ -321,7 +325,9 @@ pub fn bench_report(args: &BenchArgs) -> Result<BenchReport> {
         swept_seconds = Some(swept);
     }
     let n = args.sensitivity_samples;
-    let sobol = time(repetitions.min(3), |r| metamodel_sensitivity(&metamodel, &study, roof, n, 1 + r, 0.95, &Silent))?;
+    let sobol = time(repetitions.min(3), |r| {
+        metamodel_sensitivity(&metamodel, &study, roof, n, 1 + r, 0.95, &OnThisMachine, &Silent)
+    })?;
     rows.push(row(
         format!("Sobol indices, N = {n}, with bootstrap intervals (all threads)"),
         sobol,

@@ -3,7 +3,7 @@
 
 use super::read_metamodel;
 use super::validate::Counter;
-use crate::analysis::metamodel_demands;
+use crate::analysis::{OnThisMachine, metamodel_demands};
 use crate::error::{Error, Result};
 use clap::Args;
 use std::path::PathBuf;
@@ -33,7 +33,15 @@ pub struct DemandsArgs {
 pub fn demands(args: &DemandsArgs) -> Result<String> {
     let (metamodel, study) = read_metamodel(&args.model)?;
     let started = Instant::now();
-    let demands = metamodel_demands(&metamodel, &study, args.wind_speed, args.samples, args.seed, &Counter(started))?;
+    let demands = metamodel_demands(
+        &metamodel,
+        &study,
+        args.wind_speed,
+        args.samples,
+        args.seed,
+        &OnThisMachine,
+        &Counter(started),
+    )?;
     let csv = demands.pelicun_csv();
     let Some(path) = &args.out else { return Ok(csv) };
     std::fs::write(path, &csv).map_err(|e| Error::invalid("out", format!("{}: {e}", path.display())))?;

@@ -4,7 +4,9 @@
 use super::args::{AnalysisArgs, SamplingArgs, answer, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
-use crate::analysis::{PeakProfile, ResponseKind, check_confidence, check_quantile, metamodel_profiles, profile_svg};
+use crate::analysis::{
+    OnThisMachine, PeakProfile, ResponseKind, check_confidence, check_quantile, metamodel_profiles, profile_svg,
+};
 use crate::error::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -52,8 +54,16 @@ pub fn profile(args: &ProfileArgs) -> Result<String> {
     let kind = ResponseKind::parse(&args.response)?;
     let started = Instant::now();
     let seed = args.analysis.seed;
-    let samples =
-        metamodel_profiles(&metamodel, &study, &inputs, args.sampling.samples, seed, kind, &Counter(started))?;
+    let samples = metamodel_profiles(
+        &metamodel,
+        &study,
+        &inputs,
+        args.sampling.samples,
+        seed,
+        kind,
+        &OnThisMachine,
+        &Counter(started),
+    )?;
     let seconds = started.elapsed().as_secs_f64();
     let profile = samples.quantile_profile(args.quantile, args.analysis.confidence)?;
     let label = format!("{} ({})", kind.at_floor(1).per_storm().replace(" of floor 1", ""), profile.unit);

@@ -3,7 +3,7 @@
 use super::args::{AnalysisArgs, ResponseArgs};
 use super::read_metamodel;
 use super::validate::Counter;
-use crate::analysis::metamodel_sensitivity;
+use crate::analysis::{OnThisMachine, metamodel_sensitivity};
 use crate::error::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -38,6 +38,7 @@ pub fn sensitivity(args: &SensitivityArgs) -> Result<String> {
         args.samples,
         args.analysis.seed,
         args.analysis.confidence,
+        &OnThisMachine,
         &Counter(started),
     )?;
     let seconds = started.elapsed().as_secs_f64();

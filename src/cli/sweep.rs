@@ -4,7 +4,7 @@
 use super::args::{AnalysisArgs, ResponseArgs, answer, climate_arg, out_format};
 use super::read_metamodel;
 use super::validate::Counter;
-use crate::analysis::{Sweep, SweepOptions, metamodel_sweep, sweep_svg};
+use crate::analysis::{OnThisMachine, Sweep, SweepOptions, metamodel_sweep, sweep_svg};
 use crate::error::Result;
 use clap::Args;
 use std::path::PathBuf;
@@ -61,7 +61,7 @@ pub fn sweep(args: &SweepArgs) -> Result<String> {
         confidence: args.analysis.confidence,
     };
     let started = Instant::now();
-    let sweep = metamodel_sweep(&metamodel, &study, response, &options, &Counter(started))?;
+    let sweep = metamodel_sweep(&metamodel, &study, response, &options, &OnThisMachine, &Counter(started))?;
     let seconds = started.elapsed().as_secs_f64();
     let label = format!("{}-year {} ({})", sweep.return_period_years, response.per_storm(), response.unit());
     let out = args.out.as_deref().zip(format);

@@ -10,7 +10,7 @@ use super::rendering::Rendering;
 use super::schema::thresholds_schema;
 use crate::analysis::{
     CertifyOptions, ClimateSpec, DEFAULT_RETURN_PERIODS, Fragility, FragilityOptions, HazardCurve, HazardOptions,
-    ReferenceRunner, Response, ResponseKind, ResponseName, Sampling, Sensitivity, check_confidence, climate_or_own,
+    Response, ResponseKind, ResponseName, Sampling, Sensitivity, StormRunner, check_confidence, climate_or_own,
     fragility_svg, hazard_svg, metamodel_fragility, metamodel_hazard, metamodel_sensitivity, metamodel_serviceability,
     metamodel_sweep, serviceability_svg, sweep_svg,
 };
@@ -328,14 +328,14 @@ impl AnalysisRequest {
         }
     }
 
-    /// Samples the metamodel and answers (blocking; parallel over storms); a certified answer's
-    /// reference storms run where `reference` puts them.
+    /// Samples the metamodel and answers (blocking; parallel over storms); its storms, and a
+    /// certified answer's reference storms, run where `storms` puts them.
     pub fn answer(
         &self,
         metamodel: &Metamodel,
         study: &Study,
         metamodel_id: &str,
-        reference: &dyn ReferenceRunner,
+        storms: &dyn StormRunner,
         observer: &dyn Observer,
     ) -> Result<AnalysisAnswer> {
         let metamodel_id = metamodel_id.to_string();
@@ -344,16 +344,24 @@ impl AnalysisRequest {
         Ok(match self {
             AnalysisRequest::Hazard(r) => {
                 let options = r.options(study)?;
-                let curve = metamodel_hazard(metamodel, study, response(), &options, reference, observer)?;
+                let curve = metamodel_hazard(metamodel, study, response(), &options, storms, observer)?;
                 AnalysisAnswer::Hazard(Box::new(HazardAnswer { curve, response: response(), metamodel_id }))
             }
             AnalysisRequest::Fragility(r) => {
-                let fragility = metamodel_fragility(metamodel, study, response(), &r.options()?, reference, observer)?;
+                let fragility = metamodel_fragility(metamodel, study, response(), &r.options()?, storms, observer)?;
                 AnalysisAnswer::Fragility(Box::new(FragilityAnswer { fragility, response: response(), metamodel_id }))
             }
             AnalysisRequest::Sensitivity(r) => {
-                let sensitivity =
-                    metamodel_sensitivity(metamodel, study, response(), r.samples, r.seed, r.confidence, observer)?;
+                let sensitivity = metamodel_sensitivity(
+                    metamodel,
+                    study,
+                    response(),
+                    r.samples,
+                    r.seed,
+                    r.confidence,
+                    storms,
+                    observer,
+                )?;
                 AnalysisAnswer::Sensitivity(Box::new(SensitivityAnswer {
                     sensitivity,
                     response: response(),
@@ -361,11 +369,11 @@ impl AnalysisRequest {
                 }))
             }
             AnalysisRequest::Serviceability(r) => {
-                let check = metamodel_serviceability(metamodel, study, &r.options(study)?, reference, observer)?;
+                let check = metamodel_serviceability(metamodel, study, &r.options(study)?, storms, observer)?;
                 AnalysisAnswer::Serviceability(Box::new(ServiceabilityAnswer { check, metamodel_id }))
             }
             AnalysisRequest::Sweep(r) => {
-                let sweep = metamodel_sweep(metamodel, study, response(), &r.options(study)?, observer)?;
+                let sweep = metamodel_sweep(metamodel, study, response(), &r.options(study)?, storms, observer)?;
                 AnalysisAnswer::Sweep(Box::new(SweepAnswer { sweep, response: response(), metamodel_id }))
             }
         })

@@ -2,7 +2,7 @@
 //! once (a demand sample is a file for a loss assessment, not an operation's JSON result).
 
 use super::ServeArgs;
-use crate::analysis::metamodel_demands;
+use crate::analysis::{OnThisMachine, metamodel_demands};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::Study;
@@ -54,6 +54,7 @@ impl DemandsRequest {
 
     /// The demand sample as pelicun reads it (blocking; parallel over storms).
     pub fn answer(&self, metamodel: &Metamodel, study: &Study, observer: &dyn Observer) -> Result<String> {
-        Ok(metamodel_demands(metamodel, study, self.wind_speed, self.samples, self.seed, observer)?.pelicun_csv())
+        Ok(metamodel_demands(metamodel, study, self.wind_speed, self.samples, self.seed, &OnThisMachine, observer)?
+            .pelicun_csv())
     }
 }

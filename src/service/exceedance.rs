@@ -7,8 +7,8 @@ use super::ServeArgs;
 use super::rendering::Rendering;
 use super::schema::{fixed_inputs_schema, thresholds_schema};
 use crate::analysis::{
-    Certification, CertifyOptions, Exceedance, ExceedanceCurve, ExceedanceOptions, PeakProfile, ReferenceRunner,
-    Response, ResponseKind, ResponseName, exceedance_csv, exceedance_figure, metamodel_exceedance,
+    Certification, CertifyOptions, Exceedance, ExceedanceCurve, ExceedanceOptions, PeakProfile, Response, ResponseKind,
+    ResponseName, StormRunner, exceedance_csv, exceedance_figure, metamodel_exceedance,
 };
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -118,19 +118,19 @@ impl ExceedanceRequest {
         self.options().inputs(study).map(drop)
     }
 
-    /// Samples the metamodel and builds the curve (blocking; parallel over samples); a certified
-    /// curve's reference storms run where `reference` puts them.
+    /// Samples the metamodel and builds the curve (blocking; parallel over samples); its storms,
+    /// and a certified curve's reference storms, run where `storms` puts them.
     pub fn answer(
         &self,
         metamodel: &Metamodel,
         study: &Study,
         metamodel_id: &str,
-        reference: &dyn ReferenceRunner,
+        storms: &dyn StormRunner,
         observer: &dyn Observer,
     ) -> Result<ExceedanceAnswer> {
         let response = self.response.located(self.floor, self.group, &study.structure)?;
         let Exceedance { curve, certification, profile } =
-            metamodel_exceedance(metamodel, study, response, &self.options(), reference, observer)?;
+            metamodel_exceedance(metamodel, study, response, &self.options(), storms, observer)?;
         let metamodel_id = metamodel_id.to_string();
         Ok(ExceedanceAnswer { curve, response, profile, certification, metamodel_id })
     }

@@ -3,23 +3,29 @@
 //! and saves progress every second, and stores the outcome guarded by the lease. A worker that dies
 //! loses its lease and the work is taken up again.
 //!
-//! A calibration is spread over the replicas: its worker plans it (selection experiments, scales,
-//! structures), queues the other experiments as tasks in chunks, works on them itself, and
-//! assembles the metamodel when every chunk is done. A certified answer queues its reference
-//! storms the same way ([`ReferenceTasks`]). Idle workers of any replica take tasks before new
-//! jobs. The rest of a job runs whole on the worker that claimed it.
+//! A calibration is spread over the replicas: its worker runs the selection experiments, queues
+//! each mode's structure selection as a task, then the other experiments in chunks, then the
+//! expansions in chunks, works on each phase's tasks itself beside the other replicas' workers,
+//! and assembles the metamodel when every chunk is done. An answer queues its metamodel storms, and a
+//! certified answer its reference storms, the same way ([`StormTasks`]). Idle workers of any
+//! replica take tasks before new jobs. The rest of a job runs whole on the worker that claimed it.
 
 use super::lease::LeaseKeeper;
 use super::store::Store;
 use super::supervision::{Supervision, blocking, through_faults};
-use super::tasks::{EXPERIMENTS_PER_TASK, Experiments, ReferenceTasks, TaskRequest, run_task, work_through_tasks};
+use super::tasks::{
+    EXPERIMENTS_PER_TASK, ExpansionTasks, Experiments, JobTasks, StormTasks, Structure, TaskRequest, run_task,
+    work_through_tasks,
+};
 use super::work::Job;
 use super::{AppState, CalibrationRequest};
 use crate::analysis::{held_inputs, validate};
 use crate::error::{Error, Result};
-use crate::progress::{Observer, Progress, Silent};
+use crate::progress::{Observer, Progress};
 use crate::study::Study;
-use crate::surrogate::phases::{ExperimentFit, assemble, plan};
+use crate::surrogate::assembly::assemble;
+use crate::surrogate::identify::StructureChoice;
+use crate::surrogate::phases::{ExperimentFit, Planned, Selection, select};
 use crate::surrogate::{CalibrationOptions, Metamodel, StageSeconds};
 use std::future::Future;
 use std::pin::Pin;
@@ -110,18 +116,18 @@ async fn prepare(
             .await
         }
         Job::Exceedance(job) => {
-            let reference = reference_tasks(state, id, owner, &job.metamodel_id);
+            let storms = storm_tasks(state, id, owner, &job.metamodel_id);
             let metamodel_id = job.metamodel_id.clone();
             sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
-                job.request.answer(metamodel, study, &job.metamodel_id, &reference, observer)
+                job.request.answer(metamodel, study, &job.metamodel_id, &storms, observer)
             })
             .await
         }
         Job::Hazard(job) | Job::Fragility(job) | Job::Sensitivity(job) | Job::Serviceability(job) | Job::Sweep(job) => {
-            let reference = reference_tasks(state, id, owner, &job.metamodel_id);
+            let storms = storm_tasks(state, id, owner, &job.metamodel_id);
             let metamodel_id = job.metamodel_id.clone();
             sampling_job(state, &metamodel_id, supervision, move |metamodel, study, observer| {
-                job.request.answer(metamodel, study, &job.metamodel_id, &reference, observer)
+                job.request.answer(metamodel, study, &job.metamodel_id, &storms, observer)
             })
             .await
         }
@@ -144,15 +150,19 @@ async fn sampling_job<T: serde::Serialize>(
     })))
 }
 
-/// Where the job's certified answer runs its reference storms: as tasks of the job.
-fn reference_tasks(state: &AppState, id: &str, owner: &str, metamodel_id: &str) -> ReferenceTasks {
-    ReferenceTasks {
+/// Where the job's answer runs its storms: as tasks of the job.
+fn storm_tasks(state: &AppState, id: &str, owner: &str, metamodel_id: &str) -> StormTasks {
+    StormTasks { tasks: job_tasks(state, id, owner, 0), metamodel_id: metamodel_id.to_string() }
+}
+
+/// The job's tasks, queued from chunk `next_chunk` on.
+fn job_tasks(state: &AppState, id: &str, owner: &str, next_chunk: i64) -> JobTasks {
+    JobTasks {
         state: state.clone(),
         job_id: id.to_string(),
         owner: owner.to_string(),
-        metamodel_id: metamodel_id.to_string(),
         runtime: tokio::runtime::Handle::current(),
-        next_chunk: AtomicI64::new(0),
+        next_chunk: AtomicI64::new(next_chunk),
     }
 }
 
@@ -168,12 +178,14 @@ async fn coordinate(
 ) -> Result<(JobOutput, String)> {
     let study = Arc::new(study);
     let options = Arc::new(options);
-    let planned = {
+    let selection = {
         let (study, options, supervision) = (study.clone(), options.clone(), supervision.clone());
-        Arc::new(blocking(move || plan(&study, &options, supervision.as_ref())).await?)
+        blocking(move || select(&study, &options, supervision.as_ref())).await?
     };
+    let planned = Arc::new(choose_structures(&state, &id, &owner, &request, selection, &supervision).await?);
     let started = Instant::now();
     let remaining = planned.plan.remaining();
+    let first = planned.plan.structures.len() as i64;
     let tasks: Vec<String> = remaining
         .chunks(EXPERIMENTS_PER_TASK)
         .map(|experiments| {
@@ -186,7 +198,7 @@ async fn coordinate(
         })
         .collect();
     let store = &state.store;
-    through_faults(supervision.as_ref(), "queueing tasks", || store.insert_tasks(&id, 0, &tasks)).await?;
+    through_faults(supervision.as_ref(), "queueing tasks", || store.insert_tasks(&id, first, &tasks)).await?;
     state.wake.notify_waiters();
     let mut fits = {
         let (planned, options, supervision) = (planned.clone(), options.clone(), supervision.clone());
@@ -197,15 +209,62 @@ async fn coordinate(
         let done = selection + (tasks * EXPERIMENTS_PER_TASK).min(remaining.len());
         supervision.progress(Progress::Experiments { done, total });
     };
-    for text in work_through_tasks(&state, &id, &owner, supervision.as_ref(), 0, done).await? {
+    for text in work_through_tasks(&state, &id, &owner, supervision.as_ref(), first, done).await? {
         let chunk: Vec<ExperimentFit> =
             serde_json::from_str(&text).map_err(|e| Error::Internal(format!("a stored task result: {e}")))?;
         fits.extend(chunk);
     }
     let seconds = StageSeconds { coefficients: started.elapsed().as_secs_f64(), ..planned.seconds.clone() };
     let name = study.name.clone();
-    let metamodel = blocking(move || assemble(&study, &options, &planned, fits, seconds, &Silent)).await?;
+    let next_chunk = first + tasks.len() as i64;
+    let expansions = ExpansionTasks { tasks: job_tasks(&state, &id, &owner, next_chunk), calibration: request };
+    let metamodel = blocking(move || {
+        let expand = |targets: &[Vec<f64>]| expansions.fit(&planned.plan.design, targets, supervision.as_ref());
+        assemble(&study, &options, &planned, fits, seconds, &expand, supervision.as_ref())
+    })
+    .await?;
     Ok((JobOutput::Metamodel(Box::new(metamodel)), name))
+}
+
+/// Each mode's structure as a task of the calibration's job (chunks 0 to modes − 1), the
+/// selection held here for those this replica runs; then phase 1 done.
+async fn choose_structures(
+    state: &AppState,
+    id: &str,
+    owner: &str,
+    request: &CalibrationRequest,
+    selection: Selection,
+    supervision: &Arc<Supervision>,
+) -> Result<Planned> {
+    let started = Instant::now();
+    let modes = selection.modes();
+    let tasks: Vec<String> = (0..modes)
+        .map(|mode| {
+            let task = TaskRequest::Structure(Box::new(Structure {
+                calibration: request.clone(),
+                selection: selection.plan.clone(),
+                mode,
+            }));
+            serde_json::to_string(&task).expect("a task serialises")
+        })
+        .collect();
+    let selection = Arc::new(selection);
+    let outputs = {
+        let _held = state.selections.hold(id, selection.clone());
+        through_faults(supervision.as_ref(), "queueing tasks", || state.store.insert_tasks(id, 0, &tasks)).await?;
+        state.wake.notify_waiters();
+        let done = |tasks: usize| supervision.progress(Progress::Structure { mode: (tasks + 1).min(modes) });
+        work_through_tasks(state, id, owner, supervision.as_ref(), 0, done).await?
+    };
+    let structures = outputs
+        .iter()
+        .map(|text| serde_json::from_str(text).map_err(|e| Error::Internal(format!("a stored structure: {e}"))))
+        .collect::<Result<Vec<StructureChoice>>>()?;
+    if structures.len() != modes {
+        return Err(Error::Internal(format!("{} structures came back of {modes}", structures.len())));
+    }
+    let selection = Arc::try_unwrap(selection).unwrap_or_else(|shared| (*shared).clone());
+    Ok(selection.planned(structures, started.elapsed().as_secs_f64()))
 }
 
 async fn run(state: &AppState, owner: &str, id: String, kind: &str, request: String) {

@@ -50,6 +50,9 @@ pub struct AppState {
     draining: Arc<AtomicBool>,
     /// Metamodels read back from the store, with their rebuilt studies, by id; bounded.
     metamodels: Arc<MetamodelCache>,
+    /// The selection experiments of the calibrations this replica coordinates, for the structure
+    /// tasks it runs itself.
+    selections: Arc<tasks::HeldSelections>,
     /// One permit per synchronous sampling request allowed to run; none left means 503.
     sampling: Arc<Semaphore>,
     /// One permit per open event stream on this replica; none left means 503.
@@ -80,6 +83,7 @@ impl Application {
             wake: Arc::new(Notify::new()),
             draining: Arc::new(AtomicBool::new(false)),
             metamodels: Arc::new(MetamodelCache::new(config.loaded_metamodels)),
+            selections: Arc::default(),
             sampling: Arc::new(Semaphore::new(config.sync_request_slots())),
             streams: Arc::new(Semaphore::new(config.max_event_streams)),
             config: Arc::new(config),

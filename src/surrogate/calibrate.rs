@@ -3,9 +3,10 @@
 //! coefficients of every experiment refined on the simulation error, and their sparse polynomial
 //! chaos expansions. The phases themselves are in `phases`, so that replicas can share them.
 
+use super::assembly::{assemble, fit_expansions};
 use super::metamodel::{Metamodel, StageSeconds};
 use super::options::CalibrationOptions;
-use super::phases::{assemble, fit_experiments, plan};
+use super::phases::{fit_experiments, plan};
 use crate::error::Result;
 use crate::progress::Observer;
 use crate::study::Study;
@@ -20,5 +21,6 @@ pub fn calibrate(study: &Study, options: &CalibrationOptions, observer: &dyn Obs
     let remaining = planned.plan.remaining();
     fits.extend(fit_experiments(study, options, &planned.plan, &remaining, planned.plan.selection.len(), observer)?);
     let seconds = StageSeconds { coefficients: stage.elapsed().as_secs_f64(), ..planned.seconds.clone() };
-    assemble(study, options, &planned, fits, seconds, observer)
+    let expand = |targets: &[Vec<f64>]| fit_expansions(study, options, &planned.plan.design, targets, observer);
+    assemble(study, options, &planned, fits, seconds, &expand, observer)
 }

@@ -1,6 +1,7 @@
 //! PC-NARX metamodels (sections 3.2-3.3): NARX dynamics per retained mode whose coefficients are
 //! sparse polynomial-chaos expansions of the uncertain inputs.
 
+pub mod assembly;
 pub mod batch;
 mod calibrate;
 mod cost;

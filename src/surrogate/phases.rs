@@ -1,28 +1,25 @@
 //! The calibration in three phases, so that its experiments can be fitted anywhere:
 //!
 //! 1. [`plan`]: the Latin-hypercube design, the reference on the selection experiments, the scales of
-//!    the deviations and each mode's NARX structure, all decided on those few experiments;
+//!    the deviations ([`select`]) and each mode's NARX structure ([`Selection::structure`]), all
+//!    decided on those few experiments; a mode's structure can be chosen anywhere, the selection
+//!    experiments run again there ([`Selection::rerun`]);
 //! 2. [`fit_experiments`]: for any experiments, the reference storm and every mode's refined NARX
 //!    coefficients: independent of each other, small to send back ([`ExperimentFit`]), the same
 //!    numbers on whichever machine runs them;
-//! 3. [`assemble`]: the polynomial chaos expansions of the coefficients and static levels, and the
-//!    diagnostics.
+//! 3. [`assemble`](super::assembly::assemble) (in `assembly`): the polynomial chaos expansions of
+//!    the coefficients and static levels, fitted where the caller says, and the diagnostics.
 //!
 //! Only the selection experiments' histories are held in memory (a full-size experiment's are
 //! 4 MB); every other experiment is reduced to its coefficients as soon as it has run.
 
-use super::Parametrization;
 use super::damper_law::{DamperLaw, KNEE_FRACTION};
 use super::design::design;
 use super::identify::{Record, StructureChoice, least_squares, select_structure, simulate};
-use super::metamodel::{
-    CalibrationSummary, FORMAT, FORMAT_VERSION, Metamodel, ModalBasis, ModeDiagnostics, ModeModel, StageSeconds,
-    StaticResponse,
-};
+use super::metamodel::StageSeconds;
 use super::narx::relative_error;
 use super::options::CalibrationOptions;
-use super::pce::SparsePce;
-use super::refine::{RefinementOutcome, RefinementSummary, refine};
+use super::refine::{RefinementOutcome, refine};
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress, check};
 use crate::simd::LANES;
@@ -78,10 +75,11 @@ pub struct ExperimentFit {
 }
 
 /// One experiment's histories for every mode: modal forces and reference modal displacements.
-struct Experiment {
+#[derive(Clone)]
+pub(super) struct Experiment {
     q: Vec<Vec<f64>>,
-    q_mean: Vec<f64>,
-    y: Vec<Vec<f64>>,
+    pub(super) q_mean: Vec<f64>,
+    pub(super) y: Vec<Vec<f64>>,
     /// Per mode, the least 1 + a₂ its NARX model's linear part may have: half the structure's
     /// own viscous damping of the mode, 1 − exp(−2ζωΔt), as the exact discrete oscillator has it.
     damping_floors: Vec<f64>,
@@ -133,7 +131,7 @@ impl Experiment {
     }
 
     /// Every mode's record, scaled as the plan says; with coupling each shares all modes' outputs.
-    fn records(&self, scales: &[(f64, f64)], coupled: bool, law: Option<&Arc<DamperLaw>>) -> Vec<Record> {
+    pub(super) fn records(&self, scales: &[(f64, f64)], coupled: bool, law: Option<&Arc<DamperLaw>>) -> Vec<Record> {
         let scaled = |series: &[f64], rest: f64, scale: f64| -> Arc<[f64]> {
             series.iter().map(|v| (v - rest) / scale).collect()
         };
@@ -187,7 +185,7 @@ impl Experiment {
     }
 }
 
-fn coupled(options: &CalibrationOptions, modes: usize) -> bool {
+pub(super) fn coupled(options: &CalibrationOptions, modes: usize) -> bool {
     options.narx.coupling_lags > 0 && modes > 1
 }
 
@@ -206,14 +204,42 @@ fn pooled_rms<'a>(series: impl Iterator<Item = &'a [f64]>, rest: impl Fn(usize) 
 pub struct Planned {
     /// The plan every experiment's fit follows.
     pub plan: CalibrationPlan,
-    selection: Vec<Experiment>,
+    pub(super) selection: Vec<Experiment>,
     /// Wall time of phase 1's stages (s).
     pub seconds: StageSeconds,
 }
 
-/// Phase 1: the design, the selection experiments through the reference (in parallel), the
-/// deviations' scales and every mode's structure.
+/// Phase 1 on this machine: [`select`], then every mode's structure.
 pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Planned> {
+    let selection = select(study, options, observer)?;
+    let stage = Instant::now();
+    let structures = (0..selection.modes())
+        .map(|mode| {
+            check(observer)?;
+            observer.progress(Progress::Structure { mode: mode + 1 });
+            selection.structure(mode, options, observer)
+        })
+        .collect::<Result<_>>()?;
+    Ok(selection.planned(structures, stage.elapsed().as_secs_f64()))
+}
+
+/// Phase 1 up to the structures: the selection experiments run, the deviations' scales and the
+/// dampers' law decided, and what each mode's structure is chosen on. (Cloned only when a
+/// task still holds it as the job goes on, which is rare.)
+#[derive(Clone)]
+pub struct Selection {
+    /// The plan so far: every field but `structures`, which is empty.
+    pub plan: CalibrationPlan,
+    experiments: Vec<Experiment>,
+    /// Per selection experiment, every mode's record.
+    records: Vec<Vec<Record>>,
+    /// Wall time of the selection experiments (s).
+    pub seconds: StageSeconds,
+}
+
+/// The design, the selection experiments through the reference (in parallel), the deviations'
+/// scales and the dampers' law.
+pub fn select(study: &Study, options: &CalibrationOptions, observer: &dyn Observer) -> Result<Selection> {
     options.check()?;
     let started = Instant::now();
     let design = design(study, options)?.points;
@@ -221,20 +247,8 @@ pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer
     let stride = (k as f64 / options.selection_experiments.min(k) as f64).max(1.0);
     let selection: Vec<usize> =
         (0..options.selection_experiments.min(k)).map(|i| (i as f64 * stride) as usize).collect();
-    let done = AtomicUsize::new(0);
-    let experiments: Vec<Vec<Experiment>> = selection
-        .par_chunks(LANES)
-        .map_init(TransformWorkspace::default, |workspace, chunk| {
-            check(observer)?;
-            let experiments = Experiment::run_batch(study, options, &design, chunk, workspace, observer)?;
-            for _ in chunk {
-                observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total: k });
-            }
-            Ok(experiments)
-        })
-        .collect::<Result<_>>()?;
-    let experiments: Vec<Experiment> = experiments.into_iter().flatten().collect();
-    let mut seconds = StageSeconds { experiments: started.elapsed().as_secs_f64(), ..Default::default() };
+    let experiments = run_selection(study, options, &design, &selection, observer)?;
+    let seconds = StageSeconds { experiments: started.elapsed().as_secs_f64(), ..Default::default() };
     // The NARX works on deviations from the static state at rest under the mean load: y′ = y − y(0),
     // Q′ = Q − Q̄. Polynomial terms then act on the fluctuation, and the static level (a smooth
     // function of the inputs) gets its own expansion instead of hiding in a constant.
@@ -246,7 +260,6 @@ pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer
             (y, q)
         })
         .collect();
-    let stage = Instant::now();
     let nonlinear_dampers = study.damper_exponent != 1.0 && !study.structure.dampers.is_empty();
     let damper_law = (nonlinear_dampers && options.narx.damper_terms).then(|| DamperLaw {
         exponent: study.damper_exponent,
@@ -260,20 +273,84 @@ pub fn plan(study: &Study, options: &CalibrationOptions, observer: &dyn Observer
             })
             .collect(),
     });
-    let law = damper_law.clone().map(Arc::new);
-    let records: Vec<Vec<Record>> =
-        experiments.iter().map(|e| e.records(&scales, coupled(options, modes), law.as_ref())).collect();
-    let mut structures = Vec::new();
-    for mode in 0..modes {
-        check(observer)?;
-        observer.progress(Progress::Structure { mode: mode + 1 });
-        let chosen: Vec<Record> = records.iter().map(|r| r[mode].clone()).collect();
-        let dictionary = options.narx.dictionary(mode, modes, damper_law.is_some());
-        structures.push(select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms, observer)?);
+    let plan = CalibrationPlan { design, selection, scales, structures: Vec::new(), damper_law };
+    Ok(Selection::of(plan, experiments, options, seconds))
+}
+
+/// Experiments `selection` of `design` through the reduced-order reference, in parallel batches.
+fn run_selection(
+    study: &Study,
+    options: &CalibrationOptions,
+    design: &[Vec<f64>],
+    selection: &[usize],
+    observer: &dyn Observer,
+) -> Result<Vec<Experiment>> {
+    let (done, total) = (AtomicUsize::new(0), design.len());
+    let experiments: Vec<Vec<Experiment>> = selection
+        .par_chunks(LANES)
+        .map_init(TransformWorkspace::default, |workspace, chunk| {
+            check(observer)?;
+            let experiments = Experiment::run_batch(study, options, design, chunk, workspace, observer)?;
+            for _ in chunk {
+                observer.progress(Progress::Experiments { done: done.fetch_add(1, Ordering::Relaxed) + 1, total });
+            }
+            Ok(experiments)
+        })
+        .collect::<Result<_>>()?;
+    Ok(experiments.into_iter().flatten().collect())
+}
+
+impl Selection {
+    fn of(
+        plan: CalibrationPlan,
+        experiments: Vec<Experiment>,
+        options: &CalibrationOptions,
+        seconds: StageSeconds,
+    ) -> Selection {
+        let law = plan.damper_law.clone().map(Arc::new);
+        let coupled = coupled(options, plan.scales.len());
+        let records = experiments.iter().map(|e| e.records(&plan.scales, coupled, law.as_ref())).collect();
+        Selection { plan, experiments, records, seconds }
     }
-    seconds.structure = stage.elapsed().as_secs_f64();
-    let plan = CalibrationPlan { design, selection, scales, structures, damper_law };
-    Ok(Planned { plan, selection: experiments, seconds })
+
+    /// The selection of `plan` (as [`select`] decided it on this study and these options) on a
+    /// machine that does not hold it: its experiments run again, the same histories to the bit.
+    pub fn rerun(
+        study: &Study,
+        options: &CalibrationOptions,
+        plan: &CalibrationPlan,
+        observer: &dyn Observer,
+    ) -> Result<Selection> {
+        let plan = CalibrationPlan { structures: Vec::new(), ..plan.clone() };
+        let experiments = run_selection(study, options, &plan.design, &plan.selection, observer)?;
+        Ok(Selection::of(plan, experiments, options, StageSeconds::default()))
+    }
+
+    /// The number of modes.
+    pub fn modes(&self) -> usize {
+        self.plan.scales.len()
+    }
+
+    /// Mode `mode`'s NARX structure, chosen on the selection experiments.
+    pub fn structure(
+        &self,
+        mode: usize,
+        options: &CalibrationOptions,
+        observer: &dyn Observer,
+    ) -> Result<StructureChoice> {
+        if mode >= self.modes() {
+            return Err(Error::invalid("mode", format!("the study has {} modes, not {}", self.modes(), mode + 1)));
+        }
+        let chosen: Vec<Record> = self.records.iter().map(|r| r[mode].clone()).collect();
+        let dictionary = options.narx.dictionary(mode, self.modes(), self.plan.damper_law.is_some());
+        select_structure(&dictionary, &chosen, &chosen, options.narx.max_terms, observer)
+    }
+
+    /// Phase 1 done with these structures, chosen in `seconds`.
+    pub fn planned(self, structures: Vec<StructureChoice>, seconds: f64) -> Planned {
+        let plan = CalibrationPlan { structures, ..self.plan };
+        Planned { plan, selection: self.experiments, seconds: StageSeconds { structure: seconds, ..self.seconds } }
+    }
 }
 
 impl Planned {
@@ -319,131 +396,4 @@ pub fn fit_experiments(
         })
         .collect::<Result<_>>()?;
     Ok(fits.into_iter().flatten().collect())
-}
-
-/// Phase 3: the expansions of every experiment's coefficients and static level over the inputs,
-/// the PC-NARX error on the selection experiments, and the metamodel. `fits` holds every
-/// experiment of the design, in any order.
-pub fn assemble(
-    study: &Study,
-    options: &CalibrationOptions,
-    planned: &Planned,
-    mut fits: Vec<ExperimentFit>,
-    mut seconds: StageSeconds,
-    observer: &dyn Observer,
-) -> Result<Metamodel> {
-    let started = Instant::now();
-    let plan = &planned.plan;
-    fits.sort_by_key(|f| f.index);
-    if fits.iter().map(|f| f.index).ne(0..plan.design.len()) {
-        return Err(Error::Numerical("assembling needs one fit of every experiment of the design".into()));
-    }
-    let xi: Vec<Vec<f64>> = plan.design.iter().map(|x| study.inputs.to_standard(x)).collect();
-    let weights = design(study, options)?.weights;
-    if weights.len() != xi.len() {
-        return Err(Error::Numerical("the plan's design is not the options' design".into()));
-    }
-    let modes = plan.structures.len();
-    let law = plan.damper_law.clone().map(Arc::new);
-    let selection_records: Vec<Vec<Record>> =
-        planned.selection.iter().map(|e| e.records(&plan.scales, coupled(options, modes), law.as_ref())).collect();
-    let mut models = Vec::new();
-    let mut diagnostics = Vec::new();
-    for mode in 0..modes {
-        check(observer)?;
-        observer.progress(Progress::Expansion { mode: mode + 1 });
-        let (output_scale, input_scale) = plan.scales[mode];
-        let structure = &plan.structures[mode];
-        let terms = structure.terms.clone();
-        let largest_load = fits.iter().map(|f| f.mean_load[mode].abs()).fold(0.0, f64::max);
-        let per_unit_mean_load = fits.iter().all(|f| f.mean_load[mode].abs() > 1e-6 * largest_load);
-        let static_targets: Vec<f64> = fits
-            .iter()
-            .map(|f| {
-                let y0 = f.static_displacement[mode];
-                if per_unit_mean_load { y0 / f.mean_load[mode] } else { y0 }
-            })
-            .collect();
-        let static_response = StaticResponse {
-            per_unit_mean_load,
-            expansion: SparsePce::fit(&study.inputs, &xi, &static_targets, &weights, &options.pce, observer)?,
-        };
-        let thetas: Vec<Vec<f64>> = fits.iter().map(|f| f.coefficients[mode].clone()).collect();
-        let parametrization = options.parametrization.unwrap_or_else(|| Parametrization::choose(&terms, &thetas));
-        let expanded: Vec<Vec<f64>> = thetas.iter().map(|theta| parametrization.forward(&terms, theta)).collect();
-        let expansions: Vec<SparsePce> = (0..terms.len())
-            .into_par_iter()
-            .map(|i| {
-                let targets: Vec<f64> = expanded.iter().map(|phi| phi[i]).collect();
-                SparsePce::fit(&study.inputs, &xi, &targets, &weights, &options.pce, observer)
-            })
-            .collect::<Result<_>>()?;
-
-        let pc_errors: Vec<f64> = planned
-            .selection
-            .par_iter()
-            .zip(&plan.selection)
-            .zip(&selection_records)
-            .map(|((experiment, &index), records)| {
-                let phi: Vec<f64> = expansions.iter().map(|pce| pce.evaluate(&xi[index])).collect();
-                let theta = parametrization.inverse(&terms, &phi);
-                let level = static_response.evaluate(&xi[index], experiment.q_mean[mode]);
-                simulate(&terms, &theta, &records[mode]).map_or(f64::INFINITY, |y_hat| {
-                    let full: Vec<f64> = y_hat.iter().map(|v| level + v * output_scale).collect();
-                    relative_error(&experiment.y[mode], &full)
-                })
-            })
-            .collect();
-        let narx_errors: Vec<f64> = fits.iter().map(|f| f.narx_errors[mode]).collect();
-        let diverged = narx_errors.iter().chain(&pc_errors).filter(|e| !e.is_finite()).count();
-        let mean = |errors: &[f64]| errors.iter().sum::<f64>() / errors.len() as f64;
-        diagnostics.push(ModeDiagnostics {
-            mode: mode + 1,
-            selected_terms: terms.iter().map(|t| t.to_string()).collect(),
-            candidate_structures: structure.candidates,
-            structure_error: structure.error,
-            narx_mean_relative_error: mean(&narx_errors),
-            pc_narx_mean_relative_error: mean(&pc_errors),
-            static_level_loo_error: static_response.expansion.loo_error,
-            coefficient_loo_errors: expansions.iter().map(|p| p.loo_error).collect(),
-            coefficient_pce_terms: expansions.iter().map(|p| p.terms.len()).collect(),
-            diverged_experiments: diverged,
-            refinement: RefinementSummary::of(
-                &fits.iter().filter_map(|f| f.refinements.get(mode).copied().flatten()).collect::<Vec<_>>(),
-            ),
-        });
-        models.push(ModeModel {
-            term_names: terms.iter().map(|t| t.to_string()).collect(),
-            terms,
-            output_scale,
-            input_scale,
-            static_response,
-            parametrization,
-            coefficients: expansions,
-        });
-    }
-    seconds.expansion = started.elapsed().as_secs_f64();
-    seconds.total = seconds.experiments + seconds.structure + seconds.coefficients + seconds.expansion;
-    let count = diagnostics.len() as f64;
-    let modes = &study.modes;
-    Ok(Metamodel {
-        format: FORMAT.into(),
-        version: FORMAT_VERSION,
-        study: study.resolved_spec(),
-        modes: ModalBasis {
-            frequencies_rad_s: modes.frequencies.clone(),
-            modal_masses_kg: modes.modal_masses.clone(),
-            shapes: (0..modes.count()).map(|m| modes.shapes.col(m).iter().copied().collect()).collect(),
-        },
-        models,
-        damper_law: plan.damper_law.clone(),
-        calibration: CalibrationSummary {
-            options: options.clone(),
-            narx_mean_relative_error: diagnostics.iter().map(|d| d.narx_mean_relative_error).sum::<f64>() / count,
-            pc_narx_mean_relative_error: diagnostics.iter().map(|d| d.pc_narx_mean_relative_error).sum::<f64>() / count,
-            modes: diagnostics,
-            seconds,
-        },
-        wind_continuation: Default::default(),
-    })
 }

@@ -11,11 +11,12 @@
 use std::sync::Mutex;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
-use windmeta::analysis::{Response, metamodel_peaks};
+use windmeta::analysis::{OnThisMachine, Response, metamodel_peaks};
 use windmeta::error::Error;
 use windmeta::progress::{Observer, Progress, Silent};
 use windmeta::study::Study;
-use windmeta::surrogate::phases::{assemble, fit_experiments, plan};
+use windmeta::surrogate::assembly::{assemble, fit_expansions};
+use windmeta::surrogate::phases::{fit_experiments, plan};
 use windmeta::surrogate::{CalibrationOptions, calibrate};
 
 const LATENCY_BOUND: Duration = Duration::from_secs(2);
@@ -96,7 +97,8 @@ fn a_stop_reaches_every_stage_within_about_a_second() {
     fits.extend(fit_experiments(&study, &options, &planned.plan, &remaining, 20, &Silent).unwrap());
     let expansions: Trigger = |p| matches!(p, Progress::Expansion { mode: 1 });
     stops_soon("expansions", expansions, |observer| {
-        assemble(&study, &options, &planned, fits, planned.seconds.clone(), observer)
+        let expand = |targets: &[Vec<f64>]| fit_expansions(&study, &options, &planned.plan.design, targets, observer);
+        assemble(&study, &options, &planned, fits, planned.seconds.clone(), &expand, observer)
     });
 
     // The shared fixture, calibrated on two-minute storms (the NARX models do not depend on the
@@ -104,7 +106,7 @@ fn a_stop_reaches_every_stage_within_about_a_second() {
     let metamodel = &crate::harness::fixture::metamodel().0;
     let observer = StopAt::new(|p| matches!(p, Progress::Samples { .. }));
     let roof = Response::Displacement { floor: study.structure.floors() };
-    let outcome = metamodel_peaks(metamodel, &study, &study.inputs, 100_000, 1, roof, &observer);
+    let outcome = metamodel_peaks(metamodel, &study, &study.inputs, 100_000, 1, roof, &OnThisMachine, &observer);
     let latency = observer.latency();
     eprintln!("sampling: stopped {:.0} ms after the request", latency.as_secs_f64() * 1e3);
     assert!(matches!(outcome, Err(Error::Cancelled)));

@@ -27,7 +27,7 @@ fn reference_storms_pair_with_the_metamodels_own_storms() {
     let rows = monte_carlo(&study.inputs, 24, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..24).collect();
     let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
-    let batched = peaks_at(metamodel, &draws, roof, &Silent).unwrap();
+    let batched = peaks_at(metamodel, &draws, roof, &OnThisMachine, &Silent).unwrap();
     for (pair, batched) in paired.iter().zip(&batched) {
         assert!((pair.metamodel - batched).abs() <= 1e-9 * batched, "{pair:?} against {batched}");
         // And the two models see the same storm (the fixture's peak error is about 0.3 %).
@@ -52,7 +52,7 @@ fn the_certified_curve_agrees_with_reference_monte_carlo() {
     let rows = monte_carlo(&study.inputs, samples, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..samples).collect();
     let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
-    let peaks = peaks_at(metamodel, &draws, acceleration, &Silent).unwrap();
+    let peaks = peaks_at(metamodel, &draws, acceleration, &OnThisMachine, &Silent).unwrap();
     let mut sorted = peaks.clone();
     sorted.sort_by(f64::total_cmp);
     let thresholds: Vec<f64> = [0.2, 0.5, 0.8].iter().map(|q| sorted[(q * samples as f64) as usize]).collect();
@@ -130,7 +130,8 @@ async fn a_certified_request_is_an_operation_with_its_correction() {
     let (metamodel, study) = fixture::metamodel();
     let acceleration = Response::Acceleration { floor: study.structure.floors() };
     let here = tokio::task::block_in_place(|| {
-        let peaks = metamodel_peaks(metamodel, study, &study.inputs, 200, 2, acceleration, &Silent).unwrap();
+        let peaks =
+            metamodel_peaks(metamodel, study, &study.inputs, 200, 2, acceleration, &OnThisMachine, &Silent).unwrap();
         let thresholds: Vec<f64> = result["thresholds"].as_array().unwrap().iter().map(number).collect();
         let certify = CertifyOptions { reference_storms: 40, order: Order::Reduced };
         let inputs = &study.inputs;

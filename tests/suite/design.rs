@@ -203,7 +203,9 @@ async fn the_design_routes_answer_the_librarys_numbers() {
         confidence: 0.95,
     };
     let roof = Response::Acceleration { floor: floors };
-    let here = tokio::task::block_in_place(|| metamodel_sweep(metamodel, study, roof, &options, &Silent).unwrap());
+    let here = tokio::task::block_in_place(|| {
+        metamodel_sweep(metamodel, study, roof, &options, &OnThisMachine, &Silent).unwrap()
+    });
     assert_eq!(served["results"], serde_json::to_value(&here.results).unwrap());
     let levels: Vec<f64> = here.results.iter().map(|p| p.level.unwrap()).collect();
     assert!(levels.windows(2).all(|w| w[1] < w[0]), "more damping, less acceleration: {levels:?}");

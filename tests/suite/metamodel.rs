@@ -12,8 +12,8 @@ use serde_json::Value;
 use std::path::PathBuf;
 use std::process::Command;
 use windmeta::analysis::{
-    Response, ResponseKind, ResponseView, STANDARD_GRAVITY, ValidationReport, exceedance_curve, metamodel_demands,
-    metamodel_peaks, validate,
+    OnThisMachine, Response, ResponseKind, ResponseView, STANDARD_GRAVITY, ValidationReport, exceedance_curve,
+    metamodel_demands, metamodel_peaks, validate,
 };
 use windmeta::dynamics::{ModalMotion, SampleModel};
 use windmeta::progress::Silent;
@@ -117,7 +117,7 @@ fn exceedance_curves_respond_to_the_wind() {
     let roof = Response::Displacement { floor: 40 };
     let at = |v: f64| {
         let inputs = study.inputs.clone().with_fixed("wind_speed", v).unwrap();
-        metamodel_peaks(metamodel, study, &inputs, 60, 3, roof, &Silent).unwrap()
+        metamodel_peaks(metamodel, study, &inputs, 60, 3, roof, &OnThisMachine, &Silent).unwrap()
     };
     let (light, strong) = (at(25.0), at(35.0));
     let thresholds: Vec<f64> = (0..30).map(|i| 0.1 + 0.02 * i as f64).collect();
@@ -126,9 +126,14 @@ fn exceedance_curves_respond_to_the_wind() {
     assert!(a.probabilities.windows(2).all(|w| w[0] >= w[1]));
     assert!(a.probabilities.iter().zip(&b.probabilities).all(|(p, q)| p <= q));
     assert!(a.probabilities.iter().zip(&b.probabilities).any(|(p, q)| p < q));
-    let drift = metamodel_peaks(metamodel, study, &study.inputs, 8, 3, Response::Drift { floor: 20 }, &Silent).unwrap();
+    let drift =
+        metamodel_peaks(metamodel, study, &study.inputs, 8, 3, Response::Drift { floor: 20 }, &OnThisMachine, &Silent)
+            .unwrap();
     assert!(drift.iter().all(|d| *d > 0.0 && *d < 0.1));
-    assert!(metamodel_peaks(metamodel, study, &study.inputs, 8, 3, Response::Drift { floor: 41 }, &Silent).is_err());
+    assert!(
+        metamodel_peaks(metamodel, study, &study.inputs, 8, 3, Response::Drift { floor: 41 }, &OnThisMachine, &Silent)
+            .is_err()
+    );
 }
 
 fn windmeta(args: &[&str]) -> std::process::Output {
@@ -241,7 +246,7 @@ fn batched_peaks_equal_the_peaks_of_the_histories() {
         (Response::DamperForce { floor: 12 }, 1e-9),
     ];
     for (response, tolerance) in responses {
-        let peaks = metamodel_peaks(metamodel, study, &study.inputs, 11, 3, response, &Silent).unwrap();
+        let peaks = metamodel_peaks(metamodel, study, &study.inputs, 11, 3, response, &OnThisMachine, &Silent).unwrap();
         let xs = windmeta::uncertainty::monte_carlo(&study.inputs, 11, &mut rng_from_seed(3));
         for (k, (x, peak)) in xs.iter().zip(&peaks).enumerate() {
             let (_, coarse) = study.sample_storm(x, WindPath::Modal, 3, k, &mut TransformWorkspace::default()).unwrap();
@@ -334,7 +339,7 @@ fn every_response_is_sampled() {
     let (metamodel, study) = fixture::metamodel();
     let peaks = |response: Response, v: f64| {
         let inputs = study.inputs.clone().with_fixed("wind_speed", v).unwrap();
-        metamodel_peaks(metamodel, study, &inputs, 6, 3, response, &Silent).unwrap()
+        metamodel_peaks(metamodel, study, &inputs, 6, 3, response, &OnThisMachine, &Silent).unwrap()
     };
     let cos = study.structure.dampers[31].cos_angle;
     let (drift, stroke) =
@@ -508,13 +513,15 @@ fn files_whose_terms_cannot_run_are_refused() {
 fn demands_are_every_floors_peaks_in_pelicuns_units() {
     let (metamodel, study) = fixture::metamodel();
     let (speed, samples, seed) = (40.0, 24, 4);
-    let demands = metamodel_demands(metamodel, study, speed, samples, seed, &Silent).unwrap();
+    let demands = metamodel_demands(metamodel, study, speed, samples, seed, &OnThisMachine, &Silent).unwrap();
     let inputs = study.inputs.clone().with_fixed("wind_speed", speed).unwrap();
     let heights = study.structure.storey_heights();
     let floors = study.structure.floors();
     assert_eq!((demands.floor_accelerations[0].len(), demands.drift_ratios[0].len()), (floors + 1, floors));
     for floor in [1, floors / 2, floors] {
-        let single = |response| metamodel_peaks(metamodel, study, &inputs, samples, seed, response, &Silent).unwrap();
+        let single = |response| {
+            metamodel_peaks(metamodel, study, &inputs, samples, seed, response, &OnThisMachine, &Silent).unwrap()
+        };
         let accelerations = single(Response::Acceleration { floor });
         let drifts = single(Response::Drift { floor });
         for storm in 0..samples {
@@ -527,7 +534,7 @@ fn demands_are_every_floors_peaks_in_pelicuns_units() {
     assert!(demands.floor_accelerations.iter().all(|storm| storm[0] == 0.0), "the ground does not move");
     let csv = demands.pelicun_csv();
     assert_eq!(csv.lines().count(), samples + 2, "header, units, one row per storm");
-    let bad = metamodel_demands(metamodel, study, -1.0, samples, seed, &Silent).unwrap_err();
+    let bad = metamodel_demands(metamodel, study, -1.0, samples, seed, &OnThisMachine, &Silent).unwrap_err();
     assert!(bad.to_string().contains("wind_speed"), "{bad}");
 }
 
@@ -543,7 +550,9 @@ async fn the_demand_route_answers_the_librarys_sample() {
     assert_eq!(response.headers()["content-type"], "text/csv");
     let served = response.text().await.unwrap();
     let (metamodel, study) = fixture::metamodel();
-    let here = tokio::task::block_in_place(|| metamodel_demands(metamodel, study, 36.0, 12, 3, &Silent).unwrap());
+    let here = tokio::task::block_in_place(|| {
+        metamodel_demands(metamodel, study, 36.0, 12, 3, &OnThisMachine, &Silent).unwrap()
+    });
     assert_eq!(served, here.pelicun_csv());
     for (wrong, field) in [
         (serde_json::json!({"wind_speed": 36, "samples": 0}), "samples"),

@@ -1,5 +1,6 @@
 //! Several `windmeta serve` processes on one PostgreSQL database: they share the job queue and the
-//! tasks of one job (a calibration's experiments, a certified answer's reference storms), a
+//! tasks of one job (a calibration's structure selection, experiments and expansions, an answer's
+//! metamodel storms, a certified answer's reference storms), a
 //! replica killed in the middle of a job loses it to another that finishes it, and no job completes
 //! twice. Skipped, with the reason printed, where no PostgreSQL is reachable.
 
@@ -7,7 +8,10 @@ use crate::harness::fixture;
 use crate::harness::postgres::fresh_postgres;
 use serde_json::{Value, json};
 use sqlx::Row;
+use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader};
+use windmeta::analysis::{ExceedanceOptions, OnThisMachine, Response, metamodel_exceedance};
+use windmeta::progress::Silent;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
@@ -159,7 +163,51 @@ async fn api_and_worker_roles_split_the_work() {
     wait_succeeded(&client, &api, &id, Duration::from_secs(120)).await;
 }
 
-/// One calibration's experiments are spread over the replicas: both run some of its tasks.
+/// What a task's request asks for, told by a field only that kind of task has.
+fn task_kind(request: &str) -> &'static str {
+    let request: Value = serde_json::from_str(request).expect("a task's request is JSON");
+    let kinds = [
+        ("mode", "structure"),
+        ("experiments", "experiments"),
+        ("targets", "expansions"),
+        ("order", "reference storms"),
+        ("responses", "metamodel storms"),
+    ];
+    kinds.iter().find(|(field, _)| request.get(field).is_some()).map(|(_, kind)| *kind).expect("a known task")
+}
+
+/// Polls a job's tasks until the job is done and it succeeded: its operation, and per kind of
+/// task the replicas (process ids) that ran one.
+async fn watch_tasks(
+    pool: &sqlx::AnyPool,
+    client: &reqwest::Client,
+    replica: &Replica,
+    id: &str,
+) -> (Value, BTreeMap<&'static str, BTreeSet<String>>) {
+    let mut runners: BTreeMap<&'static str, BTreeSet<String>> = BTreeMap::new();
+    let started = Instant::now();
+    loop {
+        let rows = sqlx::query("SELECT request, lease_owner FROM tasks WHERE job_id = $1 AND lease_owner IS NOT NULL")
+            .bind(id)
+            .fetch_all(pool)
+            .await
+            .unwrap();
+        for row in rows {
+            let (request, owner): (String, String) = (row.get("request"), row.get("lease_owner"));
+            runners.entry(task_kind(&request)).or_default().insert(pid_of(&owner));
+        }
+        let op = operation(client, replica, id).await;
+        if op["done"] == true {
+            assert_eq!(op["state"], "succeeded", "{op}");
+            return (op, runners);
+        }
+        assert!(started.elapsed() < Duration::from_secs(300), "stuck: {op}");
+        tokio::time::sleep(Duration::from_millis(50)).await;
+    }
+}
+
+/// One calibration is spread over the replicas: its structure selection, experiments and
+/// expansions run as tasks, and both replicas run experiments of it.
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn one_calibration_is_spread_over_replicas() {
     let Some(url) = fresh_postgres().await else { return };
@@ -170,25 +218,53 @@ async fn one_calibration_is_spread_over_replicas() {
     let body = json!({"experiments": 100, "duration_s": 300, "seed": 4});
     let r = client.post(format!("{}/v1/calibrations", first.address)).json(&body).send().await.unwrap();
     let id = r.json::<Value>().await.unwrap()["id"].as_str().unwrap().to_string();
-    let mut task_owners = std::collections::BTreeSet::new();
-    let started = Instant::now();
-    loop {
-        let rows = sqlx::query("SELECT lease_owner FROM tasks WHERE state = 'running'").fetch_all(&pool).await.unwrap();
-        for row in rows {
-            let owner: String = row.get("lease_owner");
-            task_owners.insert(pid_of(&owner));
-        }
-        let op = operation(&client, &second, &id).await;
-        if op["done"] == true {
-            assert_eq!(op["state"], "succeeded", "{op}");
-            break;
-        }
-        assert!(started.elapsed() < Duration::from_secs(300), "stuck: {op}");
-        tokio::time::sleep(Duration::from_millis(50)).await;
+    let (_, runners) = watch_tasks(&pool, &client, &second, &id).await;
+    let kinds: Vec<&str> = runners.keys().copied().collect();
+    assert_eq!(kinds, ["expansions", "experiments", "structure"], "{runners:?}");
+    let both: BTreeSet<String> = [first.pid().to_string(), second.pid().to_string()].into();
+    assert_eq!(runners["experiments"], both, "both replicas ran experiments of the one calibration");
+}
+
+/// An answer's metamodel storms are shared by the replicas in tasks, and the answer is the one
+/// computed in this process, to the bit: a storm's peaks depend only on its row and its stream.
+#[tokio::test(flavor = "multi_thread", worker_threads = 2)]
+async fn metamodel_storms_are_shared_and_answer_as_in_process() {
+    let Some(url) = fresh_postgres().await else { return };
+    let pool = sqlx::AnyPool::connect(&url).await.unwrap();
+    let first = Replica::start(&url, "all");
+    let second = Replica::start(&url, "all");
+    let metamodel_id = fixture::install_at(&url, 900.0).await;
+    let client = reqwest::Client::new();
+    // Six tasks of storms (more than one task's worth, which an answer runs where it is).
+    let body = json!({"samples": 6000, "seed": 6, "response": "acceleration", "floor": 30});
+    let path = format!("{}/v1/metamodels/{metamodel_id}/exceedance", first.address);
+    let r = client.post(path).json(&body).send().await.unwrap();
+    assert_eq!(r.status().as_u16(), 202);
+    let id = r.json::<Value>().await.unwrap()["id"].as_str().unwrap().to_string();
+    let (op, runners) = watch_tasks(&pool, &client, &second, &id).await;
+    let both: BTreeSet<String> = [first.pid().to_string(), second.pid().to_string()].into();
+    assert_eq!(runners.get("metamodel storms"), Some(&both), "both replicas ran storms: {runners:?}");
+
+    let mut metamodel = fixture::metamodel().0.clone();
+    metamodel.study.duration_s = Some(900.0);
+    let options = ExceedanceOptions {
+        samples: 6000,
+        seed: 6,
+        fixed: Default::default(),
+        thresholds: None,
+        confidence: 0.95,
+        profile_quantile: None,
+        certify: None,
+    };
+    let in_process = tokio::task::block_in_place(|| {
+        let study = metamodel.study().unwrap();
+        let response = Response::Acceleration { floor: 30 };
+        metamodel_exceedance(&metamodel, &study, response, &options, &OnThisMachine, &Silent).unwrap()
+    });
+    let curve = serde_json::to_value(&in_process.curve).unwrap();
+    for (field, value) in curve.as_object().unwrap() {
+        assert_eq!(&op["result"][field], value, "{field}");
     }
-    let mut expected = std::collections::BTreeSet::new();
-    expected.extend([first.pid().to_string(), second.pid().to_string()]);
-    assert_eq!(task_owners, expected, "both replicas ran experiments of the one calibration");
 }
 
 /// (chunk, state, attempts, lease owner's process id) of a job's tasks.

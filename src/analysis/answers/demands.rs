@@ -4,6 +4,7 @@
 
 use crate::analysis::responses::response::{Response, STANDARD_GRAVITY};
 use crate::analysis::sampling::draws::{Draws, OnDivergence, check_samples, peak_sets_at};
+use crate::analysis::sampling::runner::StormRunner;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Study, WIND_SPEED};
@@ -32,6 +33,7 @@ pub fn metamodel_demands(
     wind_speed: f64,
     samples: usize,
     seed: u64,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Demands> {
     check_samples(samples)?;
@@ -48,7 +50,7 @@ pub fn metamodel_demands(
     let rows = monte_carlo(&inputs, samples, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..samples).collect();
     let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
-    let peaks = peak_sets_at(metamodel, &draws, &responses, observer)?;
+    let peaks = peak_sets_at(metamodel, &draws, &responses, runner, observer)?;
     let heights = study.structure.storey_heights();
     let floor_accelerations = peaks
         .iter()

@@ -13,7 +13,7 @@ use crate::analysis::sampling::draws::{check_samples, held_inputs, metamodel_pea
 use crate::analysis::sampling::exceedance::{
     ExceedanceCurve, automatic_thresholds, check_confidence, check_thresholds,
 };
-use crate::analysis::sampling::reference_storms::ReferenceRunner;
+use crate::analysis::sampling::runner::StormRunner;
 use crate::error::{Error, Result, require_finite};
 use crate::progress::Observer;
 use crate::study::Study;
@@ -98,7 +98,7 @@ pub fn metamodel_exceedance(
     study: &Study,
     response: Response,
     options: &ExceedanceOptions,
-    runner: &dyn ReferenceRunner,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Exceedance> {
     options.check()?;
@@ -106,9 +106,9 @@ pub fn metamodel_exceedance(
     let inputs = options.inputs(study)?;
     let (samples, seed) = (options.samples, options.seed);
     let (peaks, profile) = match options.profile_quantile {
-        None => (metamodel_peaks(metamodel, study, &inputs, samples, seed, response, observer)?, None),
+        None => (metamodel_peaks(metamodel, study, &inputs, samples, seed, response, runner, observer)?, None),
         Some(p) => {
-            let all = metamodel_profiles(metamodel, study, &inputs, samples, seed, response.kind(), observer)?;
+            let all = metamodel_profiles(metamodel, study, &inputs, samples, seed, response.kind(), runner, observer)?;
             let columns: Vec<usize> = response
                 .members(&study.structure)?
                 .iter()

@@ -9,7 +9,8 @@ use crate::analysis::responses::response::Response;
 use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, name_diverged, peaks_at};
 use crate::analysis::sampling::exceedance::check_thresholds;
 use crate::analysis::sampling::exceedance::{check_confidence, clopper_pearson};
-use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
+use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, reference_storm_seed};
+use crate::analysis::sampling::runner::StormRunner;
 use crate::error::{Error, Result};
 use crate::optimise::nelder_mead;
 use crate::progress::Observer;
@@ -333,14 +334,14 @@ pub fn metamodel_fragility(
     study: &Study,
     response: Response,
     options: &FragilityOptions,
-    runner: &dyn ReferenceRunner,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Fragility> {
     response.check(&study.structure)?;
     let calibrated = metamodel.calibrated_range(study, WIND_SPEED)?;
     let peaks_of = |rows: &[Vec<f64>], storms: &[usize]| {
         let draws = Draws { study, rows, storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
-        peaks_at(metamodel, &draws, response, observer)
+        peaks_at(metamodel, &draws, response, runner, observer)
     };
     let order = options.certify.map_or(Order::Reduced, |c| c.order);
     let runs = PairedRuns { metamodel, study, seed: reference_storm_seed(options.seed), response, order };

@@ -10,7 +10,8 @@ use crate::analysis::sampling::climate::{annual_probability_of_period, period_of
 use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, peaks_at};
 use crate::analysis::sampling::exceedance::check_thresholds;
 use crate::analysis::sampling::exceedance::{automatic_thresholds, check_confidence};
-use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
+use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, reference_storm_seed};
+use crate::analysis::sampling::runner::StormRunner;
 use crate::analysis::sampling::strata::{Estimate, Sampling, StormRows, StratifiedPeaks, WindStrata, pilot};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -333,7 +334,7 @@ pub fn metamodel_hazard(
     study: &Study,
     response: Response,
     options: &HazardOptions,
-    runner: &dyn ReferenceRunner,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<HazardCurve> {
     response.check(&study.structure)?;
@@ -341,7 +342,7 @@ pub fn metamodel_hazard(
     let peaks_of = |rows: &[Vec<f64>], first: usize| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
         let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
-        peaks_at(metamodel, &draws, response, observer)
+        peaks_at(metamodel, &draws, response, runner, observer)
     };
     let order = options.certify.map_or(Order::Reduced, |c| c.order);
     let runs = PairedRuns { metamodel, study, seed: reference_storm_seed(options.seed), response, order };

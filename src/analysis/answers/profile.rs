@@ -6,6 +6,7 @@ use crate::analysis::responses::peaks::quantile;
 use crate::analysis::responses::response::{Response, ResponseKind};
 use crate::analysis::sampling::draws::{Draws, OnDivergence, check_samples, peak_sets_at};
 use crate::analysis::sampling::exceedance::check_confidence;
+use crate::analysis::sampling::runner::StormRunner;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::Study;
@@ -64,6 +65,7 @@ pub fn profile_responses(kind: ResponseKind, study: &Study) -> Result<Vec<Respon
 /// Peaks of `kind` at every floor over `samples` storms of the metamodel, inputs drawn from
 /// `inputs`; sample k's inputs and storm depend only on (seed, k), as in an exceedance curve, so
 /// a floor's peaks are those of the exceedance request of that floor with the same seed.
+#[allow(clippy::too_many_arguments)]
 pub fn metamodel_profiles(
     metamodel: &Metamodel,
     study: &Study,
@@ -71,6 +73,7 @@ pub fn metamodel_profiles(
     samples: usize,
     seed: u64,
     kind: ResponseKind,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<ProfileSamples> {
     check_samples(samples)?;
@@ -78,7 +81,7 @@ pub fn metamodel_profiles(
     let rows = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..samples).collect();
     let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
-    let peaks = peak_sets_at(metamodel, &draws, &responses, observer)?;
+    let peaks = peak_sets_at(metamodel, &draws, &responses, runner, observer)?;
     Ok(ProfileSamples { responses, peaks })
 }
 

@@ -14,6 +14,7 @@
 use crate::analysis::responses::response::Response;
 use crate::analysis::sampling::draws::{Draws, OnDivergence, check_samples, peaks_at};
 use crate::analysis::sampling::exceedance::check_confidence;
+use crate::analysis::sampling::runner::StormRunner;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::Study;
@@ -163,6 +164,7 @@ pub fn sobol_indices(
 }
 
 /// The Sobol indices of a metamodel's peak `response` over its input model and the storm.
+#[allow(clippy::too_many_arguments)]
 pub fn metamodel_sensitivity(
     metamodel: &Metamodel,
     study: &Study,
@@ -170,11 +172,13 @@ pub fn metamodel_sensitivity(
     samples: usize,
     seed: u64,
     confidence: f64,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Sensitivity> {
     response.check(&study.structure)?;
     sobol_indices(&study.inputs, samples, seed, confidence, |rows, storms| {
-        peaks_at(metamodel, &Draws { study, rows, storms, seed, on_divergence: OnDivergence::Fail }, response, observer)
+        let draws = Draws { study, rows, storms, seed, on_divergence: OnDivergence::Fail };
+        peaks_at(metamodel, &draws, response, runner, observer)
     })
 }
 

@@ -16,9 +16,8 @@
 
 use crate::analysis::responses::response::Response;
 use crate::analysis::sampling::exceedance::{ExceedanceCurve, clopper_pearson, exceedance_curve};
-use crate::analysis::sampling::reference_storms::{
-    PairedPeak, PairedRuns, ReferenceRunner, reference_rows, reference_storm_seed,
-};
+use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, reference_rows, reference_storm_seed};
+use crate::analysis::sampling::runner::StormRunner;
 use crate::error::{Error, Result};
 use crate::progress::Observer;
 use crate::study::{Order, Study};
@@ -65,7 +64,7 @@ pub fn certify_exceedance(
     seed: u64,
     response: Response,
     confidence: f64,
-    runner: &dyn ReferenceRunner,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<(ExceedanceCurve, Option<Certification>)> {
     let Some(options) = certify else {

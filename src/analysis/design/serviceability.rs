@@ -20,7 +20,8 @@ use crate::analysis::responses::response::{Response, ResponseKind};
 use crate::analysis::sampling::annual_sample::{Aim, AnnualDesign, AnnualSample, PILOT_SHARE};
 use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, peak_sets_at};
 use crate::analysis::sampling::exceedance::check_confidence;
-use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, ReferenceRunner, reference_storm_seed};
+use crate::analysis::sampling::reference_storms::{PairedPeak, PairedRuns, reference_storm_seed};
+use crate::analysis::sampling::runner::StormRunner;
 use crate::analysis::sampling::strata::{Estimate, StormRows, StratifiedPeaks, WindStrata, pilot};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -208,7 +209,7 @@ pub fn metamodel_serviceability(
     metamodel: &Metamodel,
     study: &Study,
     options: &ServiceabilityOptions,
-    runner: &dyn ReferenceRunner,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Serviceability> {
     let resolved = options.resolve(study)?;
@@ -216,7 +217,7 @@ pub fn metamodel_serviceability(
     let peaks_of = |responses: &[Response], rows: &[Vec<f64>], first: usize| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
         let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
-        peak_sets_at(metamodel, &draws, responses, observer)
+        peak_sets_at(metamodel, &draws, responses, runner, observer)
     };
     let order = options.certify.map_or(Order::Reduced, |c| c.order);
     let pairs_of = |response: Response, rows: &[Vec<f64>], first: usize| {

@@ -9,6 +9,7 @@ use crate::analysis::responses::response::Response;
 use crate::analysis::sampling::annual_sample::{AnnualDesign, PILOT_SHARE};
 use crate::analysis::sampling::draws::{DivergedStorm, Draws, OnDivergence, check_samples, peaks_at};
 use crate::analysis::sampling::exceedance::check_confidence;
+use crate::analysis::sampling::runner::StormRunner;
 use crate::analysis::sampling::strata::{StormRows, StratifiedPeaks, WindStrata, pilot};
 use crate::error::{Error, Result};
 use crate::progress::Observer;
@@ -128,6 +129,7 @@ pub fn metamodel_sweep(
     study: &Study,
     response: Response,
     options: &SweepOptions,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Sweep> {
     let swept = options.check(study)?;
@@ -137,7 +139,7 @@ pub fn metamodel_sweep(
     let peaks_of = |rows: &[Vec<f64>], first: usize| {
         let storms: Vec<usize> = (first..first + rows.len()).collect();
         let draws = Draws { study, rows, storms: &storms, seed: options.seed, on_divergence: OnDivergence::Exceed };
-        peaks_at(metamodel, &draws, response, observer)
+        peaks_at(metamodel, &draws, response, runner, observer)
     };
     sweep_levels(&study.inputs, options, swept, calibrated, peaks_of)
 }

@@ -3,6 +3,7 @@
 //! the free run, reduced to the peaks of one or several responses; and the input model with some
 //! inputs held that such storms are drawn from.
 
+use super::runner::StormRunner;
 use crate::analysis::responses::motion_peaks::motion_sink;
 use crate::analysis::responses::response::Response;
 use crate::error::{Error, Result};
@@ -23,6 +24,7 @@ pub const MAX_SAMPLES: usize = 1_000_000;
 /// Peaks of `response` over `samples` storms of the metamodel, inputs drawn from `inputs` (the
 /// metamodel's own, possibly with some held fixed). Sample k's inputs and storm depend only on
 /// (seed, k). A diverging free run fails the request rather than being dropped.
+#[allow(clippy::too_many_arguments)]
 pub fn metamodel_peaks(
     metamodel: &Metamodel,
     study: &Study,
@@ -30,13 +32,14 @@ pub fn metamodel_peaks(
     samples: usize,
     seed: u64,
     response: Response,
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Vec<f64>> {
     check_samples(samples)?;
     let rows = monte_carlo(inputs, samples, &mut rng_from_seed(seed));
     let storms: Vec<usize> = (0..samples).collect();
     let draws = Draws { study, rows: &rows, storms: &storms, seed, on_divergence: OnDivergence::Fail };
-    peaks_at(metamodel, &draws, response, observer)
+    peaks_at(metamodel, &draws, response, runner, observer)
 }
 
 /// Errs unless 1 ≤ samples ≤ [`MAX_SAMPLES`].
@@ -79,7 +82,8 @@ pub struct Draws<'a> {
 }
 
 /// What a storm whose metamodel free run diverges does to an analysis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
 pub enum OnDivergence {
     /// The analysis fails, naming the sample (where every peak is needed: moments, Sobol indices).
     Fail,
@@ -131,10 +135,16 @@ pub fn name_diverged(
     }));
 }
 
-/// Peaks of `response` for every row of `draws`, in parallel by batches of [`LANES`], reporting
-/// progress and stopping when `observer` asks.
-pub fn peaks_at(metamodel: &Metamodel, draws: &Draws, response: Response, observer: &dyn Observer) -> Result<Vec<f64>> {
-    Ok(peak_sets_at(metamodel, draws, &[response], observer)?.into_iter().map(|peaks| peaks[0]).collect())
+/// Peaks of `response` for every row of `draws`, run where `runner` puts them, reporting progress
+/// and stopping when `observer` asks.
+pub fn peaks_at(
+    metamodel: &Metamodel,
+    draws: &Draws,
+    response: Response,
+    runner: &dyn StormRunner,
+    observer: &dyn Observer,
+) -> Result<Vec<f64>> {
+    Ok(peak_sets_at(metamodel, draws, &[response], runner, observer)?.into_iter().map(|peaks| peaks[0]).collect())
 }
 
 /// Peaks of each of `responses` for every row of `draws` (`[row][response]`). A damper group's
@@ -143,11 +153,12 @@ pub fn peak_sets_at(
     metamodel: &Metamodel,
     draws: &Draws,
     responses: &[Response],
+    runner: &dyn StormRunner,
     observer: &dyn Observer,
 ) -> Result<Vec<Vec<f64>>> {
     let members: Vec<Vec<Response>> =
         responses.iter().map(|r| r.members(&draws.study.structure)).collect::<Result<_>>()?;
-    let sets = floor_peak_sets_at(metamodel, draws, &members.concat(), observer)?;
+    let sets = runner.floor_peak_sets(metamodel, draws, &members.concat(), observer)?;
     let largest_of_members = |row: Vec<f64>| -> Vec<f64> {
         let mut rest = &row[..];
         members
@@ -162,14 +173,16 @@ pub fn peak_sets_at(
     Ok(sets.into_iter().map(largest_of_members).collect())
 }
 
-/// Peaks of each of the floor responses `responses` for every row of `draws`, in parallel by
-/// batches of [`LANES`], reporting progress and stopping when `observer` asks. One displacement,
-/// drift or stroke is a combination formed inside the free run; anything else comes from the
-/// batch's blocks ([`motion_sink`]), every response from the same runs.
-fn floor_peak_sets_at(
+/// Peaks of each of the floor responses `responses` for every row of `draws`, on this machine's
+/// cores by batches of [`LANES`], reporting progress and stopping when `observer` asks; a failure
+/// names the sample by its number, the rows' counted from `first`. One displacement, drift or
+/// stroke is a combination formed inside the free run; anything else comes from the batch's
+/// blocks ([`motion_sink`]), every response from the same runs.
+pub fn floor_peak_sets_at(
     metamodel: &Metamodel,
     draws: &Draws,
     responses: &[Response],
+    first: usize,
     observer: &dyn Observer,
 ) -> Result<Vec<Vec<f64>>> {
     let Draws { study, rows, storms, seed, on_divergence } = *draws;
@@ -206,7 +219,7 @@ fn floor_peak_sets_at(
                     .iter()
                     .zip(&storms)
                     .enumerate()
-                    .map(|(i, (x, f))| (chunk * LANES + i, &x[..], f as &dyn ForceSource))
+                    .map(|(i, (x, f))| (first + chunk * LANES + i, &x[..], f as &dyn ForceSource))
                     .collect();
                 let peaks = match on_divergence {
                     OnDivergence::Fail => metamodel.peaks(study, &batch, &reduction, batch_workspace)?,

@@ -10,4 +10,5 @@ pub(super) mod climate;
 pub(super) mod draws;
 pub(super) mod exceedance;
 pub(super) mod reference_storms;
+pub(super) mod runner;
 pub(super) mod strata;

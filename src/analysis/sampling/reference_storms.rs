@@ -76,36 +76,6 @@ impl PairedRuns<'_> {
     }
 }
 
-/// Where a certified answer's reference storms run. They are its cost (a reference integration
-/// each), so the service spreads them over every replica's workers; the command line runs them
-/// on this machine's cores ([`OnThisMachine`]).
-pub trait ReferenceRunner {
-    /// `rows` (row i's wind from stream `storms[i]` of `runs.seed`) through both models of `runs`,
-    /// in the order of the rows.
-    fn pairs(
-        &self,
-        runs: &PairedRuns,
-        rows: &[Vec<f64>],
-        storms: &[usize],
-        observer: &dyn Observer,
-    ) -> Result<Vec<PairedPeak>>;
-}
-
-/// Reference storms on this machine's cores, in parallel.
-pub struct OnThisMachine;
-
-impl ReferenceRunner for OnThisMachine {
-    fn pairs(
-        &self,
-        runs: &PairedRuns,
-        rows: &[Vec<f64>],
-        storms: &[usize],
-        observer: &dyn Observer,
-    ) -> Result<Vec<PairedPeak>> {
-        runs.run(rows, storms, observer)
-    }
-}
-
 /// The rows of `draws` (row i's wind from stream `draws.storms[i]` of `draws.seed`) through the
 /// reference model of `order` and the metamodel, and the peak of `response` in each. A full-order
 /// storm is the floor field, and the metamodel sees its projection on the modes; a reduced-order

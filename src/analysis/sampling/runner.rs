@@ -1,0 +1,60 @@
+//! Where an answer's storms run. Storms are an answer's cost — a free run of the metamodel each,
+//! and for a certified answer a reference integration each for its reference storms — so the
+//! service spreads them over every replica's workers in chunks, while the command line runs them
+//! on this machine's cores ([`OnThisMachine`]). Whichever runs them, a storm's peaks depend only on
+//! its row and its stream: the answer is the same to the bit.
+
+use super::draws::{Draws, floor_peak_sets_at};
+use super::reference_storms::{PairedPeak, PairedRuns};
+use crate::analysis::responses::response::Response;
+use crate::error::Result;
+use crate::progress::Observer;
+use crate::surrogate::Metamodel;
+
+/// Runs an answer's storms.
+pub trait StormRunner {
+    /// `rows` (row i's wind from stream `storms[i]` of `runs.seed`) through both models of `runs`,
+    /// in the order of the rows.
+    fn pairs(
+        &self,
+        runs: &PairedRuns,
+        rows: &[Vec<f64>],
+        storms: &[usize],
+        observer: &dyn Observer,
+    ) -> Result<Vec<PairedPeak>>;
+
+    /// Peaks of each of the floor responses `responses` for every row of `draws` through
+    /// `metamodel` (`[row][response]`), in the order of the rows.
+    fn floor_peak_sets(
+        &self,
+        metamodel: &Metamodel,
+        draws: &Draws,
+        responses: &[Response],
+        observer: &dyn Observer,
+    ) -> Result<Vec<Vec<f64>>>;
+}
+
+/// Storms on this machine's cores, in parallel.
+pub struct OnThisMachine;
+
+impl StormRunner for OnThisMachine {
+    fn pairs(
+        &self,
+        runs: &PairedRuns,
+        rows: &[Vec<f64>],
+        storms: &[usize],
+        observer: &dyn Observer,
+    ) -> Result<Vec<PairedPeak>> {
+        runs.run(rows, storms, observer)
+    }
+
+    fn floor_peak_sets(
+        &self,
+        metamodel: &Metamodel,
+        draws: &Draws,
+        responses: &[Response],
+        observer: &dyn Observer,
+    ) -> Result<Vec<Vec<f64>>> {
+        floor_peak_sets_at(metamodel, draws, responses, 0, observer)
+    }
+}
