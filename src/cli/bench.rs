@@ -16,7 +16,7 @@ use crate::error::{Error, Result};
 use crate::progress::Silent;
 use crate::simd::LANES;
 use crate::study::{Order, Study, WindPath};
-use crate::surrogate::{BatchWorkspace, CalibrationOptions, Metamodel, Reduction, calibrate};
+use crate::surrogate::{BatchWorkspace, CalibrationOptions, Metamodel, PEAK_BATCH, Reduction, calibrate};
 use crate::uncertainty::{Marginal, latin_hypercube, rng_from_seed};
 use crate::wind::{ForceSource, TransformWorkspace};
 use clap::Args;
@@ -458,7 +458,7 @@ fn per_sample_rows(
         })
         .collect::<Result<Vec<_>>>()?;
     let batch: Vec<(usize, &[f64], &dyn ForceSource)> =
-        (0..LANES).map(|k| (k, &x[..], &coarse as &dyn ForceSource)).collect();
+        (0..PEAK_BATCH).map(|k| (k, &x[..], &coarse as &dyn ForceSource)).collect();
 
     let single = rayon::ThreadPoolBuilder::new()
         .num_threads(1)
@@ -491,7 +491,7 @@ fn per_sample_rows(
         let mut workspace = BatchWorkspace::default();
         let metamodel_batch =
             time(repetitions, |_| metamodel.peaks(p, &batch, &Reduction::Combination(&weights), &mut workspace))?;
-        let per_metamodel = metamodel_batch / LANES as f64;
+        let per_metamodel = metamodel_batch / PEAK_BATCH as f64;
         let rows = vec![
             row("per sample: wind, full field (40 floors) + projection", field),
             row("per sample: wind, modal fast path (3 modes), generation grid", modal_coarse),
@@ -503,7 +503,12 @@ fn per_sample_rows(
             ),
             row(&format!("per sample: reduced-order reference, the same {LANES} storms in vector lanes"), design_lanes),
             row("per sample: full-order reference integration (40 floors)", full),
-            row(&format!("per sample: metamodel free run, batches of {LANES}, peak included"), per_metamodel),
+            row(
+                &format!(
+                    "per sample: metamodel free run, {PEAK_BATCH} storms (two batches side by side), peak included"
+                ),
+                per_metamodel,
+            ),
         ];
         Ok((rows, PerSampleRatios { metamodel: reduced / per_metamodel, reference_lanes: design_alone / design_lanes }))
     })

@@ -16,6 +16,7 @@ mod parametrization;
 pub mod pce;
 pub mod phases;
 mod prediction;
+pub use prediction::PEAK_BATCH;
 mod refine;
 
 pub use batch::{BatchInput, BatchWorkspace, ModalScales, MotionSink, Reduction};

@@ -1,14 +1,21 @@
-//! A metamodel's predictions: one sample's modal histories, and the peaks of up to [`LANES`]
-//! samples run together through the batched free run, reduced as a [`Reduction`] says.
+//! A metamodel's predictions: one sample's modal histories, and the peaks of up to
+//! [`PEAK_BATCH`] samples run together through the batched free run, reduced as a [`Reduction`]
+//! says.
 
 use super::Metamodel;
 use super::batch::{
     self, BatchError, BatchInput, BatchSample, BatchWorkspace, Divergence, ModalScales, ModeProgram, Reduction, Sink,
+    SinkFactory,
 };
 use crate::error::{Error, Result};
 use crate::simd::{LANES, Lanes};
 use crate::study::Study;
 use crate::wind::ForceSource;
+
+/// Samples [`Metamodel::peaks`] takes at once: two batches of [`LANES`], which a combination's peaks
+/// run side by side (the free run waits on each step's power, and two batches' chains overlap) and
+/// a motion's one after the other.
+pub const PEAK_BATCH: usize = 2 * LANES;
 
 impl Metamodel {
     fn programs(&self) -> Vec<ModeProgram<'_>> {
@@ -58,7 +65,7 @@ impl Metamodel {
         Ok(out)
     }
 
-    /// Peaks over the storm for up to [`LANES`] samples run together, `samples[i]` = (its number
+    /// Peaks over the storm for up to [`PEAK_BATCH`] samples run together, `samples[i]` = (its number
     /// in the request, its inputs, its forces), reduced as `reduction` says: per sample, one peak
     /// per response. The number names a diverging sample. `workspace` holds the batch's buffers;
     /// keep one per thread across calls.
@@ -126,34 +133,56 @@ impl Metamodel {
             Reduction::Combination(weights) => {
                 let gains: Vec<f64> =
                     self.models.iter().zip(*weights).map(|(model, w)| w * model.output_scale).collect();
-                let mut offsets = [0.0; LANES];
-                for (offset, level) in offsets.iter_mut().zip(&levels) {
-                    *offset = level.iter().zip(*weights).map(|(l, w)| w * l).sum();
-                }
-                let mut peaks = [0.0f64; LANES];
-                let mut sink = Sink::Peaks { gains: &gains, offsets, peaks: &mut peaks };
-                let run = batch::run(&programs, &batch, steps, time_step, workspace, &mut sink);
-                Ok(run.map(|()| peaks[..samples.len()].iter().map(|&peak| vec![peak]).collect()))
+                let offsets: Vec<f64> =
+                    levels.iter().map(|level| level.iter().zip(*weights).map(|(l, w)| w * l).sum()).collect();
+                let mut peaks = vec![0.0f64; samples.len()];
+                let run = batch::run_paired_peaks(
+                    &programs, &batch, steps, time_step, workspace, &gains, &offsets, &mut peaks,
+                );
+                Ok(run.map(|()| peaks.into_iter().map(|peak| vec![peak]).collect()))
             }
             Reduction::Motion(sink_for) => {
-                let inputs: Vec<&[f64]> = samples.iter().map(|s| s.1).collect();
-                let mut level = vec![[0.0; LANES]; self.models.len()];
-                for (lane, sample_levels) in levels.iter().enumerate() {
-                    sample_levels.iter().zip(&mut level).for_each(|(value, to)| to[lane] = *value);
+                let mut peaks = Vec::with_capacity(samples.len());
+                for (g, ((samples, batch), levels)) in
+                    samples.chunks(LANES).zip(batch.chunks(LANES)).zip(levels.chunks(LANES)).enumerate()
+                {
+                    let run = self.motion_peaks(study, samples, batch, levels, sink_for, workspace)?;
+                    match run {
+                        Ok(batch_peaks) => peaks.extend(batch_peaks),
+                        Err(error) => return Ok(Err(error.shifted(g * LANES))),
+                    }
                 }
-                let scales = ModalScales {
-                    outputs: self.models.iter().map(|m| m.output_scale).collect(),
-                    inputs: self.models.iter().map(|m| m.input_scale).collect(),
-                    levels: level,
-                };
-                let mut motion = sink_for(&inputs, &scales)?;
-                let mut consume =
-                    |first: usize, outputs: &[Lanes], inputs: &[Lanes]| motion.take(first, outputs, inputs);
-                let run = batch::run(&programs, &batch, steps, time_step, workspace, &mut Sink::Blocks(&mut consume));
-                let peaks = run.map(|()| motion.finish());
-                Ok(peaks.map(|peaks| (0..samples.len()).map(|lane| peaks.iter().map(|p| p[lane]).collect()).collect()))
+                Ok(Ok(peaks))
             }
         }
+    }
+
+    /// One batch's peaks of the responses of a motion sink.
+    fn motion_peaks(
+        &self,
+        study: &Study,
+        samples: &[BatchInput],
+        batch: &[BatchSample],
+        levels: &[Vec<f64>],
+        sink_for: &SinkFactory,
+        workspace: &mut BatchWorkspace,
+    ) -> Result<std::result::Result<Vec<Vec<f64>>, BatchError>> {
+        let inputs: Vec<&[f64]> = samples.iter().map(|s| s.1).collect();
+        let mut level = vec![[0.0; LANES]; self.models.len()];
+        for (lane, sample_levels) in levels.iter().enumerate() {
+            sample_levels.iter().zip(&mut level).for_each(|(value, to)| to[lane] = *value);
+        }
+        let scales = ModalScales {
+            outputs: self.models.iter().map(|m| m.output_scale).collect(),
+            inputs: self.models.iter().map(|m| m.input_scale).collect(),
+            levels: level,
+        };
+        let mut motion = sink_for(&inputs, &scales)?;
+        let mut consume = |first: usize, outputs: &[Lanes], inputs: &[Lanes]| motion.take(first, outputs, inputs);
+        let (programs, steps, time_step) = (self.programs(), study.storm.steps(), study.storm.time_step);
+        let run = batch::run(&programs, batch, steps, time_step, workspace, &mut Sink::Blocks(&mut consume));
+        let peaks = run.map(|()| motion.finish());
+        Ok(peaks.map(|peaks| (0..samples.len()).map(|lane| peaks.iter().map(|p| p[lane]).collect()).collect()))
     }
 }
 

@@ -112,7 +112,7 @@ fn keys_weights(f: f64) -> [f64; 4] {
 /// r sets of weights serve every instant and no step computes any; otherwise each instant's are
 /// computed from i·time_step/dt_g. A weight depends only on its instant, so values do not depend
 /// on where a block starts.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct CubicSchedule {
     ratio: f64,
     periodic: Option<Vec<[f64; 4]>>,

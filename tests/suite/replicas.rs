@@ -10,11 +10,11 @@ use serde_json::{Value, json};
 use sqlx::Row;
 use std::collections::{BTreeMap, BTreeSet};
 use std::io::{BufRead, BufReader};
-use windmeta::analysis::{ExceedanceOptions, OnThisMachine, Response, metamodel_exceedance};
-use windmeta::progress::Silent;
 use std::process::{Child, Command, Stdio};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
+use windmeta::analysis::{ExceedanceOptions, OnThisMachine, Response, metamodel_exceedance};
+use windmeta::progress::Silent;
 
 struct Replica {
     child: Child,

@@ -1,5 +1,5 @@
 //! Sampling a metamodel's peaks in parallel, for every analysis: storms drawn from the input
-//! model (or given rows of inputs and their storm streams), run by batches of [`LANES`] through
+//! model (or given rows of inputs and their storm streams), run by batches of [`PEAK_BATCH`] through
 //! the free run, reduced to the peaks of one or several responses; and the input model with some
 //! inputs held that such storms are drawn from.
 
@@ -8,9 +8,8 @@ use crate::analysis::responses::motion_peaks::motion_sink;
 use crate::analysis::responses::response::Response;
 use crate::error::{Error, Result};
 use crate::progress::{Observer, Progress};
-use crate::simd::LANES;
 use crate::study::{Study, WIND_SPEED};
-use crate::surrogate::{BatchInput, BatchWorkspace, Metamodel, ModalScales, Reduction};
+use crate::surrogate::{BatchInput, BatchWorkspace, Metamodel, ModalScales, PEAK_BATCH, Reduction};
 use crate::uncertainty::{InputModel, monte_carlo, rng_from_seed};
 use crate::wind::{self, ForceSource, WindLoads};
 use rayon::prelude::*;
@@ -174,7 +173,7 @@ pub fn peak_sets_at(
 }
 
 /// Peaks of each of the floor responses `responses` for every row of `draws`, on this machine's
-/// cores by batches of [`LANES`], reporting progress and stopping when `observer` asks; a failure
+/// cores by batches of [`PEAK_BATCH`], reporting progress and stopping when `observer` asks; a failure
 /// names the sample by its number, the rows' counted from `first`. One displacement, drift or
 /// stroke is a combination formed inside the free run; anything else comes from the batch's
 /// blocks ([`motion_sink`]), every response from the same runs.
@@ -201,8 +200,8 @@ pub fn floor_peak_sets_at(
     };
     let (done, total) = (AtomicUsize::new(0), rows.len());
     let peaks: Vec<Vec<Vec<f64>>> = rows
-        .par_chunks(LANES)
-        .zip(storms.par_chunks(LANES))
+        .par_chunks(PEAK_BATCH)
+        .zip(storms.par_chunks(PEAK_BATCH))
         .enumerate()
         .map_init(
             || (wind::TransformWorkspace::default(), BatchWorkspace::default()),
@@ -219,7 +218,7 @@ pub fn floor_peak_sets_at(
                     .iter()
                     .zip(&storms)
                     .enumerate()
-                    .map(|(i, (x, f))| (first + chunk * LANES + i, &x[..], f as &dyn ForceSource))
+                    .map(|(i, (x, f))| (first + chunk * PEAK_BATCH + i, &x[..], f as &dyn ForceSource))
                     .collect();
                 let peaks = match on_divergence {
                     OnDivergence::Fail => metamodel.peaks(study, &batch, &reduction, batch_workspace)?,

@@ -116,41 +116,45 @@ impl DenseLinear {
     }
 }
 
-/// What the dense recursion does with each step's outputs, inside its own loop.
-trait StepSink<V: Vector, const M: usize> {
-    /// Step `i` of the block (counted from the block's first step) read `q[m]` and gave `y[m]`,
-    /// every lane.
-    fn take(&mut self, i: usize, y: &[V; M], q: &[V; M]);
+/// What the dense recursion does with each step's outputs, inside its own loop, for G batches
+/// run side by side.
+trait StepSink<V: Vector, const M: usize, const G: usize> {
+    /// Step `i` of the block (counted from the block's first step) read `q[g][m]` and gave
+    /// `y[g][m]`, every lane of every batch g.
+    fn take(&mut self, i: usize, y: &[[V; M]; G], q: &[[V; M]; G]);
 }
 
-/// Per lane the running peak of |offset + Σ_m gain_m ŷ_m| (see [`Sink::Peaks`]).
-struct PeakTracker<V, const M: usize> {
+/// Per lane of each of G batches the running peak of |offset + Σ_m gain_m ŷ_m| (see
+/// [`Sink::Peaks`]; the batches run the same models, so they share the gains).
+struct PeakTracker<V, const M: usize, const G: usize> {
     gains: [V; M],
-    offsets: V,
-    peaks: V,
+    offsets: [V; G],
+    peaks: [V; G],
 }
 
-impl<V: Vector, const M: usize> StepSink<V, M> for PeakTracker<V, M> {
+impl<V: Vector, const M: usize, const G: usize> StepSink<V, M, G> for PeakTracker<V, M, G> {
     #[inline(always)]
-    fn take(&mut self, _: usize, y: &[V; M], _: &[V; M]) {
-        let mut u = self.offsets;
-        for (gain, y) in self.gains.iter().zip(y) {
-            u = gain.mul_add(*y, u);
+    fn take(&mut self, _: usize, y: &[[V; M]; G], _: &[[V; M]; G]) {
+        for g in 0..G {
+            let mut u = self.offsets[g];
+            for (gain, y) in self.gains.iter().zip(&y[g]) {
+                u = gain.mul_add(*y, u);
+            }
+            // A NaN is caught by the divergence test of the block, whatever `max` makes of it.
+            self.peaks[g] = u.abs().max(self.peaks[g]);
         }
-        // A NaN is caught by the divergence test of the block, whatever `max` makes of it.
-        self.peaks = u.abs().max(self.peaks);
     }
 }
 
-/// The block's outputs and inputs as `outputs[i·M + m]`, `inputs[i·M + m]`.
+/// The block's outputs and inputs as `outputs[i·M + m]`, `inputs[i·M + m]` (one batch).
 struct Recorder<'a> {
     outputs: &'a mut [Lanes],
     inputs: &'a mut [Lanes],
 }
 
-impl<V: Vector, const M: usize> StepSink<V, M> for Recorder<'_> {
+impl<V: Vector, const M: usize> StepSink<V, M, 1> for Recorder<'_> {
     #[inline(always)]
-    fn take(&mut self, i: usize, y: &[V; M], q: &[V; M]) {
+    fn take(&mut self, i: usize, [y]: &[[V; M]; 1], [q]: &[[V; M]; 1]) {
         for (y, to) in y.iter().zip(&mut self.outputs[i * M..(i + 1) * M]) {
             y.store(to);
         }
@@ -172,126 +176,156 @@ struct Carry<V, const M: usize> {
     before_input: [V; M],
 }
 
-/// Steps `first..first + len` (first ≥ 1) by the dense linear models, M modes, K output lag slots
-/// and KI input lag slots (LOWER: no mode reads a later one, see [`DenseLinear::lower`]), each
-/// step's inputs interpolated from the lane-major coarse inputs and its outputs handed to `sink` as step `i + sink_offset`. Returns the sum over the steps of each
-/// lane's squared outputs, which the caller tests for divergence once per block. Interpolation,
-/// recursion, reduction and check share one loop, so the outputs never go through memory; the sum
-/// of each step takes the constant, the inputs, the older outputs and the newest outputs last, so
-/// that only the last few operations wait on the previous step.
+/// Steps `first..first + len` (first ≥ 1) of G batches side by side by their dense linear models
+/// (of one shape: M modes, K output lag slots and KI input lag slots, LOWER: no mode reads a later
+/// one, see [`DenseLinear::lower`]), each step's inputs interpolated from the batch's lane-major
+/// coarse inputs and its outputs handed to `sink` as step `i + sink_offset`. Returns per batch the
+/// sum over the steps of each lane's squared outputs, which the caller tests for divergence once
+/// per block. Interpolation, recursion, reduction and check share one loop, so the outputs never
+/// go through memory; the sum of each step takes the constant, the inputs, the older outputs and
+/// the newest outputs last, so that only the last few operations wait on the previous step. A
+/// step waits on the power of the dampers' law, whose latency is most of a step: two batches (G =
+/// 2) give the processor two independent chains to overlap.
 #[inline(always)]
 #[allow(clippy::needless_range_loop, clippy::too_many_arguments)] // index loops over the fixed sizes
-fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
+fn advance<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool, const G: usize>(
     isa: V::Isa,
-    dense: &DenseLinear,
+    dense: [&DenseLinear; G],
     schedule: &CubicSchedule,
-    coarse: &[Vec<Lanes>],
-    carry: &mut Carry<V, M>,
+    coarse: [&[Vec<Lanes>]; G],
+    carry: &mut [Carry<V, M>; G],
     first: usize,
     len: usize,
     sink_offset: usize,
-    sink: &mut impl StepSink<V, M>,
-) -> Lanes {
+    sink: &mut impl StepSink<V, M, G>,
+) -> [Lanes; G] {
     let zero = V::splat(isa, 0.0);
-    let mut constant = [zero; M];
-    let mut input = [[zero; M]; KI];
-    let mut output = [[[zero; M]; M]; K];
-    let mut modes: [&[Lanes]; M] = [&[]; M];
-    for m in 0..M {
-        constant[m] = V::load(isa, &dense.constant[m]);
-        modes[m] = &coarse[m];
-        for k in 0..K {
-            if k < KI {
-                input[k][m] = V::load(isa, &dense.input[k * M + m]);
-            }
-            for s in 0..M {
-                output[k][m][s] = V::load(isa, &dense.output[(k * M + m) * M + s]);
+    let mut constant = [[zero; M]; G];
+    let mut input = [[[zero; M]; KI]; G];
+    let mut output = [[[[zero; M]; M]; K]; G];
+    let mut modes: [[&[Lanes]; M]; G] = [[&[]; M]; G];
+    for g in 0..G {
+        for m in 0..M {
+            constant[g][m] = V::load(isa, &dense[g].constant[m]);
+            modes[g][m] = &coarse[g][m];
+            for k in 0..K {
+                if k < KI {
+                    input[g][k][m] = V::load(isa, &dense[g].input[k * M + m]);
+                }
+                for s in 0..M {
+                    output[g][k][m][s] = V::load(isa, &dense[g].output[(k * M + m) * M + s]);
+                }
             }
         }
     }
     let minus_one = V::splat(isa, -1.0);
-    let mut law_coefficient = [[zero; M]; M];
-    let mut modulated_coefficient = [[zero; M]; M];
+    // The batches run the same models: the law's form (which modes read it, the knees, the
+    // exponent) is the first's, the coefficients each batch's own.
+    let law = dense[0].law.as_ref();
+    let mut law_coefficient = [[[zero; M]; M]; G];
+    let mut modulated_coefficient = [[[zero; M]; M]; G];
     let mut modulated = false;
-    if let Some(law) = &dense.law {
-        for m in 0..M {
-            for s in 0..M {
-                law_coefficient[m][s] = V::load(isa, &law.coefficient[m * M + s]);
-                modulated_coefficient[m][s] = V::load(isa, &law.modulated[m * M + s]);
-                modulated |= law.modulated[m * M + s].iter().any(|c| *c != 0.0);
+    for g in 0..G {
+        if let Some(own) = &dense[g].law {
+            for m in 0..M {
+                for s in 0..M {
+                    law_coefficient[g][m][s] = V::load(isa, &own.coefficient[m * M + s]);
+                    modulated_coefficient[g][m][s] = V::load(isa, &own.modulated[m * M + s]);
+                    modulated |= own.modulated[m * M + s].iter().any(|c| *c != 0.0);
+                }
             }
         }
     }
-    let Carry { mut last, mut before, mut last_input, mut before_input } = *carry;
-    let mut squares = zero;
+    let mut last = [[zero; M]; G];
+    let mut before = [[zero; M]; G];
+    let mut last_input = [[zero; M]; G];
+    let mut before_input = [[zero; M]; G];
+    for g in 0..G {
+        Carry { last: last[g], before: before[g], last_input: last_input[g], before_input: before_input[g] } = carry[g];
+    }
+    let mut squares = [zero; G];
     schedule.for_each(
         first,
         len,
         #[inline(always)]
         |i, p, w| {
             let w = splat_weights::<V>(isa, w);
-            let mut q = [zero; M];
-            for m in 0..M {
-                q[m] = interpolate(isa, modes[m], p, &w);
+            let mut q = [[zero; M]; G];
+            for g in 0..G {
+                for m in 0..M {
+                    q[g][m] = interpolate(isa, modes[g][m], p, &w);
+                }
             }
             let mut next = constant;
-            if let Some(law) = &dense.law {
+            if let Some(law) = law {
                 // D(Δ_s) = Δ_s·S(Δ_s) of every lane, vectorised, as the scalar free run and the term
                 // lists form it; with modulated terms Δ_m·S(Δ_s) from the same secants.
-                let mut differences = [zero; M];
-                let mut secants = [zero; M];
-                for s in 0..M {
-                    differences[s] = minus_one.mul_add(before[s], last[s]);
-                    if law.read[s] {
-                        let mut difference = [0.0; LANES];
-                        differences[s].store(&mut difference);
-                        secants[s] = V::load(isa, &secant_lanes(difference, law.knees[s], law.exponent));
-                    }
-                }
-                for m in 0..M {
+                let mut differences = [[zero; M]; G];
+                let mut secants = [[zero; M]; G];
+                for g in 0..G {
                     for s in 0..M {
-                        next[m] = law_coefficient[m][s].mul_add(differences[s].mul(secants[s]), next[m]);
+                        differences[g][s] = minus_one.mul_add(before[g][s], last[g][s]);
+                        if law.read[s] {
+                            let mut difference = [0.0; LANES];
+                            differences[g][s].store(&mut difference);
+                            secants[g][s] = V::load(isa, &secant_lanes(difference, law.knees[s], law.exponent));
+                        }
                     }
                 }
-                if modulated {
+                for g in 0..G {
                     for m in 0..M {
                         for s in 0..M {
-                            next[m] = modulated_coefficient[m][s].mul_add(differences[m].mul(secants[s]), next[m]);
+                            let term = differences[g][s].mul(secants[g][s]);
+                            next[g][m] = law_coefficient[g][m][s].mul_add(term, next[g][m]);
+                        }
+                    }
+                    if modulated {
+                        for m in 0..M {
+                            for s in 0..M {
+                                let term = differences[g][m].mul(secants[g][s]);
+                                next[g][m] = modulated_coefficient[g][m][s].mul_add(term, next[g][m]);
+                            }
                         }
                     }
                 }
             }
-            for m in 0..M {
-                next[m] = input[0][m].mul_add(q[m], next[m]);
-                if KI > 1 {
-                    next[m] = input[1 % KI][m].mul_add(last_input[m], next[m]);
-                }
-                if KI > 2 {
-                    next[m] = input[2 % KI][m].mul_add(before_input[m], next[m]);
-                }
-                let sources = if LOWER { m + 1 } else { M };
-                if K > 2 {
-                    for s in 0..sources {
-                        next[m] = output[2 % K][m][s].mul_add(before[s], next[m]);
+            for g in 0..G {
+                for m in 0..M {
+                    next[g][m] = input[g][0][m].mul_add(q[g][m], next[g][m]);
+                    if KI > 1 {
+                        next[g][m] = input[g][1 % KI][m].mul_add(last_input[g][m], next[g][m]);
                     }
-                }
-                for s in 0..sources {
-                    next[m] = output[1][m][s].mul_add(last[s], next[m]);
+                    if KI > 2 {
+                        next[g][m] = input[g][2 % KI][m].mul_add(before_input[g][m], next[g][m]);
+                    }
+                    let sources = if LOWER { m + 1 } else { M };
+                    if K > 2 {
+                        for s in 0..sources {
+                            next[g][m] = output[g][2 % K][m][s].mul_add(before[g][s], next[g][m]);
+                        }
+                    }
+                    for s in 0..sources {
+                        next[g][m] = output[g][1][m][s].mul_add(last[g][s], next[g][m]);
+                    }
                 }
             }
             before_input = last_input;
             last_input = q;
             before = last;
             last = next;
-            for m in 0..M {
-                squares = next[m].mul_add(next[m], squares);
+            for g in 0..G {
+                for m in 0..M {
+                    squares[g] = next[g][m].mul_add(next[g][m], squares[g]);
+                }
             }
             sink.take(i + sink_offset, &next, &q);
         },
     );
-    *carry = Carry { last, before, last_input, before_input };
-    let mut sums = [0.0; LANES];
-    squares.store(&mut sums);
+    let mut sums = [[0.0; LANES]; G];
+    for g in 0..G {
+        carry[g] = Carry { last: last[g], before: before[g], last_input: last_input[g], before_input: before_input[g] };
+        squares[g].store(&mut sums[g]);
+    }
     sums
 }
 
@@ -324,14 +358,74 @@ fn record_block<V: Vector, const M: usize, const K: usize, const KI: usize, cons
 ) -> Lanes {
     let mut recorder = Recorder { outputs: block, inputs };
     if first == 0 {
-        recorder.take(0, rest, &carry.last_input);
+        StepSink::<V, M, 1>::take(&mut recorder, 0, &[*rest], &[carry.last_input]);
     }
-    advance::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, carry, from, count, offset, &mut recorder)
+    let mut carries = [*carry];
+    let [squares] = advance::<V, M, K, KI, LOWER, 1>(
+        isa,
+        [dense],
+        schedule,
+        [coarse],
+        &mut carries,
+        from,
+        count,
+        offset,
+        &mut recorder,
+    );
+    *carry = carries[0];
+    squares
+}
+
+/// A batch's state before its first step: the rests, and the inputs at step 0.
+#[inline(always)]
+fn start<V: Vector, const M: usize>(isa: V::Isa, prepared: &Prepared) -> ([V; M], Carry<V, M>) {
+    let zero = V::splat(isa, 0.0);
+    let mut rest = [zero; M];
+    for (rest, from) in rest.iter_mut().zip(prepared.rests) {
+        *rest = V::load(isa, from);
+    }
+    let mut carry = Carry { last: rest, before: rest, last_input: [zero; M], before_input: [zero; M] };
+    prepared.schedule.for_each(0, 1, |_, p, w| {
+        for (input, coarse) in carry.last_input.iter_mut().zip(prepared.coarse) {
+            *input = interpolate(isa, coarse, p, &splat_weights(isa, w));
+        }
+    });
+    (rest, carry)
+}
+
+/// The storm's blocks: (first step, length, first computed step, steps computed, its offset).
+fn blocks(steps: usize) -> impl Iterator<Item = [usize; 4]> {
+    (0..steps).step_by(BLOCK).map(move |first| {
+        let len = BLOCK.min(steps - first);
+        // Step 0 is the rest state; every later step is computed.
+        let from = first.max(1);
+        [first, from, first + len - from, from - first]
+    })
+}
+
+/// Where a block that failed the cheap divergence test left the bound: the block run again from
+/// its start into memory and searched, so that the error names the first step out of bounds.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn search_block<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
+    isa: V::Isa,
+    dense: &DenseLinear,
+    prepared: &Prepared,
+    rest: &[V; M],
+    start: Carry<V, M>,
+    span: [usize; 4],
+    block: &mut [Lanes],
+    inputs: &mut [Lanes],
+) -> Option<Divergence> {
+    let mut replay = start;
+    let coarse = prepared.coarse;
+    record_block::<V, M, K, KI, LOWER>(isa, dense, &prepared.schedule, coarse, rest, &mut replay, span, block, inputs);
+    let [first, from, count, _] = span;
+    first_divergence(&block[..(from + count - first) * M], M, first)
 }
 
 /// The whole storm by the dense linear models: step 0 at rest, then blocks of [`BLOCK`] steps into
-/// `sink`. A block that fails the cheap divergence test is run again from its start into memory
-/// and searched, so the error names the first step out of bounds.
+/// `sink`. A block that fails the cheap divergence test is searched ([`search_block`]).
 #[inline(always)]
 fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
     isa: V::Isa,
@@ -339,49 +433,37 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
     prepared: &Prepared,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
-    let &Prepared { rests, ref schedule, coarse, steps } = prepared;
     let zero = V::splat(isa, 0.0);
-    let mut rest = [zero; M];
-    for (rest, from) in rest.iter_mut().zip(rests) {
-        *rest = V::load(isa, from);
-    }
-    let mut carry = Carry { last: rest, before: rest, last_input: [zero; M], before_input: [zero; M] };
-    schedule.for_each(0, 1, |_, p, w| {
-        for (input, coarse) in carry.last_input.iter_mut().zip(coarse) {
-            *input = interpolate(isa, coarse, p, &splat_weights(isa, w));
-        }
-    });
+    let (rest, mut carry) = start::<V, M>(isa, prepared);
+    let (schedule, coarse) = (&prepared.schedule, prepared.coarse);
     let (mut block, mut inputs) = (vec![[0.0; LANES]; BLOCK * M], vec![[0.0; LANES]; BLOCK * M]);
-    let mut first = 0;
-    while first < steps {
-        let len = BLOCK.min(steps - first);
-        // Step 0 is the rest state; every later step is computed.
-        let from = first.max(1);
-        let (count, offset) = (first + len - from, from - first);
+    for span in blocks(prepared.steps) {
+        let [first, from, count, offset] = span;
         let start = carry;
-        let span = [first, from, count, offset];
         let squares = match sink {
             Sink::Peaks { gains, offsets, peaks } => {
                 let mut tracker =
-                    PeakTracker { gains: [zero; M], offsets: V::load(isa, offsets), peaks: V::load(isa, peaks) };
+                    PeakTracker { gains: [zero; M], offsets: [V::load(isa, offsets)], peaks: [V::load(isa, peaks)] };
                 for m in 0..M {
                     tracker.gains[m] = V::splat(isa, gains[m]);
                 }
                 if first == 0 {
-                    tracker.take(0, &rest, &carry.last_input);
+                    tracker.take(0, &[rest], &[carry.last_input]);
                 }
-                let squares = advance::<V, M, K, KI, LOWER>(
+                let mut carries = [carry];
+                let [squares] = advance::<V, M, K, KI, LOWER, 1>(
                     isa,
-                    dense,
+                    [dense],
                     schedule,
-                    coarse,
-                    &mut carry,
+                    [coarse],
+                    &mut carries,
                     from,
                     count,
                     offset,
                     &mut tracker,
                 );
-                tracker.peaks.store(peaks);
+                carry = carries[0];
+                tracker.peaks[0].store(peaks);
                 squares
             }
             // The block's outputs into `block`: a function, not a closure, since a closure does
@@ -399,43 +481,113 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
                 &mut inputs,
             ),
         };
-        if suspicious(&squares) {
-            let mut replay = start;
-            record_block::<V, M, K, KI, LOWER>(
-                isa,
-                dense,
-                schedule,
-                coarse,
-                &rest,
-                &mut replay,
-                span,
-                &mut block,
-                &mut inputs,
-            );
-            if let Some(divergence) = first_divergence(&block[..len * M], M, first) {
-                return Err(divergence);
-            }
+        if suspicious(&squares)
+            && let Some(divergence) =
+                search_block::<V, M, K, KI, LOWER>(isa, dense, prepared, &rest, start, span, &mut block, &mut inputs)
+        {
+            return Err(divergence);
         }
         if let Sink::Blocks(consume) = sink {
+            let len = from + count - first;
             consume(first, &block[..len * M], &inputs[..len * M]);
         }
-        first += len;
     }
     Ok(())
 }
 
-/// [`run_shape`] for the batch's modes and lags: one instance per (M, K, KI, LOWER) listed, the
-/// shapes the paper's structures take (inputs at lag 0 or up to the output lags; one mode is
-/// always LOWER).
+/// Two batches' peaks of one combination, side by side through the storm ([`advance`] with G = 2).
+/// A lane that diverges is named by its place in the pair (the second batch's lanes after the
+/// first's).
+#[inline(always)]
+fn run_pair_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
+    isa: V::Isa,
+    dense: [&DenseLinear; 2],
+    prepared: [&Prepared; 2],
+    peaks: PairedPeaks,
+) -> Result<(), Divergence> {
+    let zero = V::splat(isa, 0.0);
+    let (rest_a, carry_a) = start::<V, M>(isa, prepared[0]);
+    let (rest_b, carry_b) = start::<V, M>(isa, prepared[1]);
+    let (rests, mut carries) = ([rest_a, rest_b], [carry_a, carry_b]);
+    let mut tracker = PeakTracker {
+        gains: [zero; M],
+        offsets: [V::load(isa, &peaks.offsets[0]), V::load(isa, &peaks.offsets[1])],
+        peaks: [V::load(isa, peaks.peaks[0]), V::load(isa, peaks.peaks[1])],
+    };
+    for m in 0..M {
+        tracker.gains[m] = V::splat(isa, peaks.gains[m]);
+    }
+    let coarse = [prepared[0].coarse, prepared[1].coarse];
+    let (mut block, mut inputs) = (vec![[0.0; LANES]; BLOCK * M], vec![[0.0; LANES]; BLOCK * M]);
+    for span in blocks(prepared[0].steps) {
+        let [first, from, count, offset] = span;
+        let starts = carries;
+        if first == 0 {
+            tracker.take(0, &rests, &[carries[0].last_input, carries[1].last_input]);
+        }
+        let schedule = &prepared[0].schedule;
+        let squares = advance::<V, M, K, KI, LOWER, 2>(
+            isa,
+            dense,
+            schedule,
+            coarse,
+            &mut carries,
+            from,
+            count,
+            offset,
+            &mut tracker,
+        );
+        for g in 0..2 {
+            if suspicious(&squares[g])
+                && let Some(divergence) = search_block::<V, M, K, KI, LOWER>(
+                    isa,
+                    dense[g],
+                    prepared[g],
+                    &rests[g],
+                    starts[g],
+                    span,
+                    &mut block,
+                    &mut inputs,
+                )
+            {
+                return Err(Divergence { lane: g * LANES + divergence.lane, ..divergence });
+            }
+        }
+    }
+    tracker.peaks[0].store(peaks.peaks[0]);
+    tracker.peaks[1].store(peaks.peaks[1]);
+    Ok(())
+}
+
+/// What two batches run side by side produce: per lane of each, the peak of one combination (as
+/// [`Sink::Peaks`]; the batches share its gains).
+pub(super) struct PairedPeaks<'a> {
+    pub gains: &'a [f64],
+    pub offsets: [Lanes; 2],
+    pub peaks: [&'a mut Lanes; 2],
+}
+
+/// One instance of `$run` per (M, K, KI, LOWER) listed, the shapes the paper's structures take
+/// (inputs at lag 0 or up to the output lags; one mode is always LOWER), chosen by `$dense`'s.
 macro_rules! dense_shapes {
-    ($isa:ident, $dense:ident, $prepared:ident, $sink:ident;
+    ($run:ident, $dense:expr, $args:tt;
      $(($m:literal, $k:literal, $ki:literal, $lower:literal)),*) => {
         match ($dense.constant.len(), $dense.slots, $dense.input_slots, $dense.lower) {
-            $(($m, $k, $ki, $lower) => {
-                run_shape::<V, $m, $k, $ki, $lower>($isa, $dense, $prepared, $sink)
-            })*
+            $(($m, $k, $ki, $lower) => $run::<V, $m, $k, $ki, $lower> $args,)*
             other => unreachable!("no dense recursion for {other:?} (DenseLinear::new admits none)"),
         }
+    };
+}
+
+/// Calls `$run` for the shape of `$dense` among the shapes the dense recursion is compiled for.
+macro_rules! each_dense_shape {
+    ($run:ident, $dense:expr, $args:tt) => {
+        dense_shapes!($run, $dense, $args;
+            (1, 2, 1, true), (1, 3, 1, true), (1, 2, 2, true), (1, 3, 3, true),
+            (2, 2, 1, true), (3, 2, 1, true), (2, 3, 1, true), (3, 3, 1, true),
+            (2, 2, 2, true), (3, 2, 2, true), (2, 3, 3, true), (3, 3, 3, true),
+            (2, 2, 1, false), (3, 2, 1, false), (2, 3, 1, false), (3, 3, 1, false),
+            (2, 2, 2, false), (3, 2, 2, false), (2, 3, 3, false), (3, 3, 3, false))
     };
 }
 
@@ -447,10 +599,32 @@ pub(super) fn run<V: Vector>(
     prepared: &Prepared,
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
-    dense_shapes!(isa, dense, prepared, sink;
-        (1, 2, 1, true), (1, 3, 1, true), (1, 2, 2, true), (1, 3, 3, true),
-        (2, 2, 1, true), (3, 2, 1, true), (2, 3, 1, true), (3, 3, 1, true),
-        (2, 2, 2, true), (3, 2, 2, true), (2, 3, 3, true), (3, 3, 3, true),
-        (2, 2, 1, false), (3, 2, 1, false), (2, 3, 1, false), (3, 3, 1, false),
-        (2, 2, 2, false), (3, 2, 2, false), (2, 3, 3, false), (3, 3, 3, false))
+    each_dense_shape!(run_shape, dense, (isa, dense, prepared, sink))
+}
+
+/// Whether two batches' dense models have one shape and their inputs one schedule, so that
+/// [`run_pair`] can run them side by side.
+pub(super) fn pairable(dense: [&DenseLinear; 2], prepared: [&Prepared; 2]) -> bool {
+    let [a, b] = dense;
+    let law = |l: &DenseLaw, k: &DenseLaw| l.read == k.read && l.knees == k.knees && l.exponent == k.exponent;
+    let laws = match (&a.law, &b.law) {
+        (Some(l), Some(k)) => law(l, k),
+        (None, None) => true,
+        _ => false,
+    };
+    laws && (a.constant.len(), a.slots, a.input_slots, a.lower) == (b.constant.len(), b.slots, b.input_slots, b.lower)
+        && prepared[0].schedule == prepared[1].schedule
+        && prepared[0].steps == prepared[1].steps
+}
+
+/// Two batches' peaks side by side through the storm, on the vectors of `isa`; the batches must be
+/// [`pairable`].
+#[inline(always)]
+pub(super) fn run_pair<V: Vector>(
+    isa: V::Isa,
+    dense: [&DenseLinear; 2],
+    prepared: [&Prepared; 2],
+    peaks: PairedPeaks,
+) -> Result<(), Divergence> {
+    each_dense_shape!(run_pair_shape, dense[0], (isa, dense, prepared, peaks))
 }

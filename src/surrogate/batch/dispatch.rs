@@ -1,7 +1,7 @@
 //! The free run as a kernel of the vector type, run on the widest vectors the processor has.
 
 use super::BatchSample;
-use super::dense::{self, DenseLinear};
+use super::dense::{self, DenseLinear, PairedPeaks};
 use super::general::{self, TermLists};
 use super::inputs::{BatchWorkspace, Prepared, lane_inputs};
 use super::sink::{Divergence, Sink};
@@ -67,10 +67,63 @@ fn free_run_on<V: Vector>(
     sink: &mut Sink,
 ) -> Result<(), Divergence> {
     let (steps, time_step) = (compiled.steps, compiled.time_step);
-    let schedule = lane_inputs(samples, &compiled.inverse_scales, steps, time_step, workspace);
+    let schedule = lane_inputs(samples, &compiled.inverse_scales, steps, time_step, &mut workspace.inputs);
     let prepared = Prepared { rests: &compiled.rests, schedule, coarse: &workspace.inputs, steps };
     match &compiled.recursion {
         Recursion::Dense(models) => dense::run::<V>(isa, models, &prepared, sink),
         Recursion::TermLists(lists) => general::run(lists, &prepared, sink),
+    }
+}
+
+/// Two batches' peaks of one combination: side by side through the dense recursion where their
+/// models allow it (the free run waits on each step's power, and two batches' chains overlap),
+/// else one after the other. A diverging lane is named by its place in the pair.
+pub(super) fn free_run_pair(
+    compiled: [&Compiled; 2],
+    samples: [&[BatchSample]; 2],
+    workspace: &mut BatchWorkspace,
+    peaks: PairedPeaks,
+) -> Result<(), Divergence> {
+    run_widest(FreeRunPair { compiled, samples, workspace, peaks })
+}
+
+struct FreeRunPair<'a, 's> {
+    compiled: [&'a Compiled; 2],
+    samples: [&'a [BatchSample<'s>]; 2],
+    workspace: &'a mut BatchWorkspace,
+    peaks: PairedPeaks<'a>,
+}
+
+impl Kernel for FreeRunPair<'_, '_> {
+    type Output = Result<(), Divergence>;
+    #[inline(always)]
+    fn run<V: Vector>(self, isa: V::Isa) -> Self::Output {
+        let FreeRunPair { compiled, samples, workspace, peaks } = self;
+        let (steps, time_step) = (compiled[0].steps, compiled[0].time_step);
+        let BatchWorkspace { inputs, paired } = workspace;
+        let schedules = [
+            lane_inputs(samples[0], &compiled[0].inverse_scales, steps, time_step, inputs),
+            lane_inputs(samples[1], &compiled[1].inverse_scales, steps, time_step, paired),
+        ];
+        let [schedule_a, schedule_b] = schedules;
+        let prepared = [
+            Prepared { rests: &compiled[0].rests, schedule: schedule_a, coarse: inputs, steps },
+            Prepared { rests: &compiled[1].rests, schedule: schedule_b, coarse: paired, steps },
+        ];
+        if let (Recursion::Dense(a), Recursion::Dense(b)) = (&compiled[0].recursion, &compiled[1].recursion)
+            && dense::pairable([a, b], [&prepared[0], &prepared[1]])
+        {
+            return dense::run_pair::<V>(isa, [a, b], [&prepared[0], &prepared[1]], peaks);
+        }
+        let PairedPeaks { gains, offsets, peaks: [first, second] } = peaks;
+        for (g, peaks) in [first, second].into_iter().enumerate() {
+            let mut sink = Sink::Peaks { gains, offsets: offsets[g], peaks };
+            let outcome = match &compiled[g].recursion {
+                Recursion::Dense(models) => dense::run::<V>(isa, models, &prepared[g], &mut sink),
+                Recursion::TermLists(lists) => general::run(lists, &prepared[g], &mut sink),
+            };
+            outcome.map_err(|d| Divergence { lane: g * crate::simd::LANES + d.lane, ..d })?;
+        }
+        Ok(())
     }
 }

@@ -14,6 +14,8 @@ use crate::wind::{CoarseSeries, CubicSchedule};
 pub struct BatchWorkspace {
     /// inputs[m][q][lane]: mode m's scaled input deviation at coarse point q, every lane.
     pub(super) inputs: Vec<Vec<Lanes>>,
+    /// The same for the second of two batches run side by side.
+    pub(super) paired: Vec<Vec<Lanes>>,
 }
 
 /// What a recursion runs on: each mode's rest state, the lane-major inputs and the schedule onto
@@ -28,7 +30,7 @@ pub(super) struct Prepared<'a> {
     pub steps: usize,
 }
 
-/// The scaled input deviations of every lane into `workspace`: inputs[m][q][lane] the value at
+/// The scaled input deviations of every lane into `inputs` (a [`BatchWorkspace`]'s): inputs[m][q][lane] the value at
 /// coarse point q (at t = (q − 1)·dt_g); returns the schedule from the storm's grid onto the coarse
 /// points. Samples from one generation grid are taken as they are; any others are filled on the
 /// storm's grid and padded, which the same interpolation then reads exactly (one step per
@@ -38,9 +40,8 @@ pub(super) fn lane_inputs(
     inverse_scales: &[f64],
     steps: usize,
     time_step: f64,
-    workspace: &mut BatchWorkspace,
+    inputs: &mut Vec<Vec<Lanes>>,
 ) -> CubicSchedule {
-    let inputs = &mut workspace.inputs;
     let transpose = |series: &[&[f64]], scale: f64, to: &mut Vec<Lanes>| {
         to.clear();
         to.extend((0..series[0].len()).map(|q| {

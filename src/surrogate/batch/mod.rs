@@ -37,7 +37,8 @@ use super::narx::{NarxTerm, rest_output};
 use crate::error::{Error, Result};
 use crate::simd::{LANES, Lanes};
 use dense::DenseLinear;
-use dispatch::{Compiled, Recursion, free_run};
+use dense::PairedPeaks;
+use dispatch::{Compiled, Recursion, free_run, free_run_pair};
 use general::TermLists;
 
 /// Runs up to [`LANES`] samples over `steps` steps of `time_step` into `sink`, with the buffers of
@@ -51,6 +52,64 @@ pub fn run(
     workspace: &mut BatchWorkspace,
     sink: &mut Sink,
 ) -> std::result::Result<(), BatchError> {
+    let compiled = compile(programs, samples, steps, time_step)?;
+    free_run(&compiled, samples, workspace, sink).map_err(BatchError::Diverged)
+}
+
+/// Up to 2·[`LANES`] samples as two batches (the first [`LANES`], then the rest) run side by side,
+/// each lane's peak of one combination into `peaks` (as [`Sink::Peaks`]: `offsets` per sample):
+/// the free run waits on each step's power of the dampers' law, and the two batches' chains
+/// overlap. Each lane's values are those of [`run`], to the bit. A failing lane is named by its
+/// place among `samples`.
+#[allow(clippy::too_many_arguments)]
+pub fn run_paired_peaks(
+    programs: &[ModeProgram],
+    samples: &[BatchSample],
+    steps: usize,
+    time_step: f64,
+    workspace: &mut BatchWorkspace,
+    gains: &[f64],
+    offsets: &[f64],
+    peaks: &mut [f64],
+) -> std::result::Result<(), BatchError> {
+    assert!(samples.len() <= 2 * LANES, "at most {} samples per pair of batches", 2 * LANES);
+    assert!(offsets.len() == samples.len() && peaks.len() == samples.len(), "one offset and peak per sample");
+    let lanes = |values: &[f64]| -> Lanes {
+        let mut lanes = [0.0; LANES];
+        lanes[..values.len()].copy_from_slice(values);
+        lanes
+    };
+    if samples.len() <= LANES {
+        let mut peak = lanes(peaks);
+        let mut sink = Sink::Peaks { gains, offsets: lanes(offsets), peaks: &mut peak };
+        run(programs, samples, steps, time_step, workspace, &mut sink)?;
+        peaks.copy_from_slice(&peak[..samples.len()]);
+        return Ok(());
+    }
+    let (first, second) = samples.split_at(LANES);
+    let compiled = [
+        compile(programs, first, steps, time_step)?,
+        compile(programs, second, steps, time_step).map_err(|error| error.shifted(LANES))?,
+    ];
+    let (mut peak_a, mut peak_b) = (lanes(&peaks[..LANES]), lanes(&peaks[LANES..]));
+    let paired = PairedPeaks {
+        gains,
+        offsets: [lanes(&offsets[..LANES]), lanes(&offsets[LANES..])],
+        peaks: [&mut peak_a, &mut peak_b],
+    };
+    free_run_pair([&compiled[0], &compiled[1]], [first, second], workspace, paired).map_err(BatchError::Diverged)?;
+    peaks[..LANES].copy_from_slice(&peak_a);
+    peaks[LANES..].copy_from_slice(&peak_b[..samples.len() - LANES]);
+    Ok(())
+}
+
+/// A batch's models compiled for the free run: rests, coefficients by lane, the recursion.
+fn compile(
+    programs: &[ModeProgram],
+    samples: &[BatchSample],
+    steps: usize,
+    time_step: f64,
+) -> std::result::Result<Compiled, BatchError> {
     assert!(samples.len() <= LANES, "at most {LANES} samples per batch");
     let modes = programs.len();
     let mut rests = vec![[0.0; LANES]; modes];
@@ -74,8 +133,7 @@ pub fn run(
         None => Recursion::TermLists(TermLists::new(programs, coefficient)),
     };
     let inverse_scales = programs.iter().map(|p| 1.0 / p.input_scale).collect();
-    let compiled = Compiled { rests, inverse_scales, recursion, steps, time_step };
-    free_run(&compiled, samples, workspace, sink).map_err(BatchError::Diverged)
+    Ok(Compiled { rests, inverse_scales, recursion, steps, time_step })
 }
 
 /// Why a batch failed.
@@ -90,6 +148,16 @@ pub enum BatchError {
     },
     /// A lane's free run left the range a sane model can produce.
     Diverged(Divergence),
+}
+
+impl BatchError {
+    /// The same failure with its lane counted `by` lanes further (a batch's among several).
+    pub fn shifted(self, by: usize) -> Self {
+        match self {
+            BatchError::Model { lane, error } => BatchError::Model { lane: lane + by, error },
+            BatchError::Diverged(d) => BatchError::Diverged(Divergence { lane: d.lane + by, ..d }),
+        }
+    }
 }
 
 /// The joint rest state of the modes under zero input deviation, by Gauss-Seidel on the modes'
@@ -284,6 +352,86 @@ mod tests {
             let largest = got[m].iter().fold(0.0f64, |a, v| a.max(v.abs()));
             let worst = scalar.iter().zip(&got[m]).fold(0.0f64, |a, (s, b)| a.max((s - b).abs()));
             assert!(worst <= 1e-10 * largest, "mode {m}: {worst:e} of {largest}");
+        }
+    }
+
+    /// Two batches side by side give every lane the peak it gets in its batch alone, to the bit,
+    /// with the dampers' law (the dense recursion) and without it; a diverging lane of the second
+    /// batch is named by its place in the pair.
+    #[test]
+    fn paired_batches_equal_batches_alone() {
+        use crate::surrogate::narx::DamperTerm;
+        let law = DamperLaw { exponent: 0.38, knees: vec![2e-3, 5e-3] };
+        let a = [
+            NarxTerm::input(0, 1),
+            NarxTerm::output(1, 1, None),
+            NarxTerm::output(2, 1, None),
+            NarxTerm::damper(DamperTerm::Law, 1, None),
+        ];
+        let b = [
+            NarxTerm::input(0, 1),
+            NarxTerm::output(1, 1, None),
+            NarxTerm::output(2, 1, None),
+            NarxTerm::damper(DamperTerm::Law, 1, Some(0)),
+            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
+        ];
+        let steps = 2600;
+        let series = |f: f64| -> Vec<f64> { (0..steps).map(|t| (t as f64 * f).sin() + 0.2).collect() };
+        let forces = ModalForces { mean: vec![0.0, 0.0], series: vec![series(0.011), series(0.029)] };
+        let with_law = [
+            ModeProgram { terms: &a, input_scale: 1.0, law: Some(&law) },
+            ModeProgram { terms: &b, input_scale: 1.0, law: Some(&law) },
+        ];
+        let linear = [
+            ModeProgram { terms: &a[..3], input_scale: 1.0, law: None },
+            ModeProgram { terms: &b[..3], input_scale: 1.0, law: None },
+        ];
+        let theta = |k: usize, law: bool| {
+            let k = k as f64;
+            let (mut ta, mut tb) = (vec![0.004, 1.985 - 1e-3 * k, -0.9905], vec![0.02, 1.95, -0.96 + 1e-4 * k]);
+            if law {
+                ta.push(-0.003 * (1.0 + 0.1 * k));
+                tb.extend([0.002, -0.01]);
+            }
+            vec![ta, tb]
+        };
+        let (gains, offsets) = ([0.7, -0.4], (0..13).map(|k| 0.01 * k as f64).collect::<Vec<f64>>());
+        for (programs, law) in [(&with_law, true), (&linear, false)] {
+            let samples: Vec<BatchSample> =
+                (0..13).map(|k| BatchSample { theta: theta(k, law), forces: &forces }).collect();
+            let mut paired = vec![0.0; 13];
+            let mut workspace = BatchWorkspace::default();
+            run_paired_peaks(programs, &samples, steps, 0.01, &mut workspace, &gains, &offsets, &mut paired).unwrap();
+            for (g, group) in samples.chunks(LANES).enumerate() {
+                let mut lane_offsets = [0.0; LANES];
+                lane_offsets[..group.len()].copy_from_slice(&offsets[g * LANES..g * LANES + group.len()]);
+                let mut alone = [0.0; LANES];
+                let mut sink = Sink::Peaks { gains: &gains, offsets: lane_offsets, peaks: &mut alone };
+                run(programs, group, steps, 0.01, &mut workspace, &mut sink).unwrap();
+                for (lane, peak) in alone[..group.len()].iter().enumerate() {
+                    assert_eq!(peak.to_bits(), paired[g * LANES + lane].to_bits(), "law {law}, batch {g} lane {lane}");
+                }
+            }
+            assert!(paired.iter().all(|p| *p > 0.1), "{paired:?}");
+        }
+        let mut samples: Vec<BatchSample> =
+            (0..13).map(|k| BatchSample { theta: theta(k, true), forces: &forces }).collect();
+        samples[11].theta[1][1] = 2.1;
+        let mut peaks = vec![0.0; 13];
+        let err = run_paired_peaks(
+            &with_law,
+            &samples,
+            steps,
+            0.01,
+            &mut BatchWorkspace::default(),
+            &gains,
+            &offsets,
+            &mut peaks,
+        )
+        .unwrap_err();
+        match err {
+            BatchError::Diverged(d) => assert_eq!((d.lane, d.mode), (11, 1)),
+            other => panic!("{other:?}"),
         }
     }
 
