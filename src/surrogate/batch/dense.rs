@@ -360,18 +360,23 @@ fn record_block<V: Vector, const M: usize, const K: usize, const KI: usize, cons
     if first == 0 {
         StepSink::<V, M, 1>::take(&mut recorder, 0, &[*rest], &[carry.last_input]);
     }
+    advance_one::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, carry, [from, count, offset], &mut recorder)
+}
+
+/// [`advance`] of one batch: steps `from..from + count`, handed to `sink` from slot `offset`.
+#[inline(always)]
+fn advance_one<V: Vector, const M: usize, const K: usize, const KI: usize, const LOWER: bool>(
+    isa: V::Isa,
+    dense: &DenseLinear,
+    schedule: &CubicSchedule,
+    coarse: &[Vec<Lanes>],
+    carry: &mut Carry<V, M>,
+    [from, count, offset]: [usize; 3],
+    sink: &mut impl StepSink<V, M, 1>,
+) -> Lanes {
     let mut carries = [*carry];
-    let [squares] = advance::<V, M, K, KI, LOWER, 1>(
-        isa,
-        [dense],
-        schedule,
-        [coarse],
-        &mut carries,
-        from,
-        count,
-        offset,
-        &mut recorder,
-    );
+    let [squares] =
+        advance::<V, M, K, KI, LOWER, 1>(isa, [dense], schedule, [coarse], &mut carries, from, count, offset, sink);
     *carry = carries[0];
     squares
 }
@@ -450,19 +455,9 @@ fn run_shape<V: Vector, const M: usize, const K: usize, const KI: usize, const L
                 if first == 0 {
                     tracker.take(0, &[rest], &[carry.last_input]);
                 }
-                let mut carries = [carry];
-                let [squares] = advance::<V, M, K, KI, LOWER, 1>(
-                    isa,
-                    [dense],
-                    schedule,
-                    [coarse],
-                    &mut carries,
-                    from,
-                    count,
-                    offset,
-                    &mut tracker,
-                );
-                carry = carries[0];
+                let span = [from, count, offset];
+                let squares =
+                    advance_one::<V, M, K, KI, LOWER>(isa, dense, schedule, coarse, &mut carry, span, &mut tracker);
                 tracker.peaks[0].store(peaks);
                 squares
             }

@@ -279,12 +279,9 @@ mod tests {
         assert!(dense[0].iter().any(|v| v.abs() > 0.1));
     }
 
-    /// Damper terms (a mode's own law, another's, and the own velocity at another's secant) run
-    /// in the batch as in the scalar free run the calibration fits them with: by the dense
-    /// recursion, and by the term lists when another term (a cubic stiffness) keeps the models out
-    /// of it.
-    #[test]
-    fn damper_terms_run_as_in_the_scalar_free_run() {
+    /// Two modes with the dampers' law: the first's own, the second reading the first's law and its
+    /// own velocity at the first's secant.
+    fn law_models() -> (DamperLaw, [NarxTerm; 4], [NarxTerm; 5]) {
         use crate::surrogate::narx::DamperTerm;
         let law = DamperLaw { exponent: 0.38, knees: vec![2e-3, 5e-3] };
         let a = [
@@ -300,6 +297,16 @@ mod tests {
             NarxTerm::damper(DamperTerm::Law, 1, Some(0)),
             NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
         ];
+        (law, a, b)
+    }
+
+    /// Damper terms (a mode's own law, another's, and the own velocity at another's secant) run
+    /// in the batch as in the scalar free run the calibration fits them with: by the dense
+    /// recursion, and by the term lists when another term (a cubic stiffness) keeps the models out
+    /// of it.
+    #[test]
+    fn damper_terms_run_as_in_the_scalar_free_run() {
+        let (law, a, b) = law_models();
         let theta = vec![vec![0.004, 1.985, -0.9905, -0.003], vec![0.02, 1.95, -0.96, 0.002, -0.01]];
         let dense = |programs: &[ModeProgram]| DenseLinear::new(programs, |_, _| [0.0; LANES]).is_some();
         let programs = [
@@ -360,21 +367,7 @@ mod tests {
     /// batch is named by its place in the pair.
     #[test]
     fn paired_batches_equal_batches_alone() {
-        use crate::surrogate::narx::DamperTerm;
-        let law = DamperLaw { exponent: 0.38, knees: vec![2e-3, 5e-3] };
-        let a = [
-            NarxTerm::input(0, 1),
-            NarxTerm::output(1, 1, None),
-            NarxTerm::output(2, 1, None),
-            NarxTerm::damper(DamperTerm::Law, 1, None),
-        ];
-        let b = [
-            NarxTerm::input(0, 1),
-            NarxTerm::output(1, 1, None),
-            NarxTerm::output(2, 1, None),
-            NarxTerm::damper(DamperTerm::Law, 1, Some(0)),
-            NarxTerm::damper(DamperTerm::Modulated, 1, Some(0)),
-        ];
+        let (law, a, b) = law_models();
         let steps = 2600;
         let series = |f: f64| -> Vec<f64> { (0..steps).map(|t| (t as f64 * f).sin() + 0.2).collect() };
         let forces = ModalForces { mean: vec![0.0, 0.0], series: vec![series(0.011), series(0.029)] };
