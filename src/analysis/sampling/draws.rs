@@ -176,7 +176,7 @@ pub fn peak_sets_at(
 /// cores by batches of [`PEAK_BATCH`], reporting progress and stopping when `observer` asks; a failure
 /// names the sample by its number, the rows' counted from `first`. One displacement, drift or
 /// stroke is a combination formed inside the free run; anything else comes from the batch's
-/// blocks ([`motion_sink`]), every response from the same runs.
+/// blocks (a motion sink of `analysis::responses`), every response from the same runs.
 pub fn floor_peak_sets_at(
     metamodel: &Metamodel,
     draws: &Draws,
