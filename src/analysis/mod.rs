@@ -56,15 +56,15 @@ pub use sampling::climate::{
     ClimateCoverage, ClimateSpec, annual_probability_of_period, climate_or_own, period_of_annual_probability,
 };
 pub use sampling::draws::{
-    DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, check_samples, describe_diverged, floor_peak_sets_at, held_inputs,
-    metamodel_peaks, peaks_at,
+    DivergedStorm, Draws, MAX_SAMPLES, OnDivergence, OnThisMachine, check_samples, describe_diverged,
+    floor_peak_sets_at, held_inputs, metamodel_peaks, peaks_at,
 };
 pub use sampling::exceedance::{
     ExceedanceCurve, MAX_THRESHOLD, MAX_THRESHOLDS, automatic_thresholds, check_confidence, check_thresholds,
     exceedance_curve, max_exceedance_gap,
 };
 pub use sampling::reference_storms::{PairedPeak, PairedRuns, paired_peaks, paired_peaks_at, reference_storm_seed};
-pub use sampling::runner::{OnThisMachine, StormRunner};
+pub use sampling::runner::StormRunner;
 pub use sampling::strata::Sampling;
 pub use validation::validate::{ValidationReport, validate};
 pub use validation::validated_responses::ResponseValidation;

@@ -3,7 +3,9 @@
 //! the free run, reduced to the peaks of one or several responses; and the input model with some
 //! inputs held that such storms are drawn from.
 
+use super::reference_storms::{PairedPeak, PairedRuns};
 use super::runner::StormRunner;
+pub use super::storms::{Draws, OnDivergence};
 use crate::analysis::responses::motion_peaks::motion_sink;
 use crate::analysis::responses::response::Response;
 use crate::error::{Error, Result};
@@ -62,33 +64,6 @@ pub fn held_inputs(study: &Study, fixed: &BTreeMap<String, f64>) -> Result<Input
         })?;
     }
     Ok(inputs)
-}
-
-/// The storms an analysis runs through the metamodel: row i's physical inputs, and the stream of
-/// the run seeded with `seed` its wind is drawn from (two rows with the same stream see the same
-/// storm phases, which common random numbers and Sobol's pick-freeze designs rely on).
-pub struct Draws<'a> {
-    /// The study the storms are drawn in (structure, input model, storm duration and step).
-    pub study: &'a Study,
-    /// The physical inputs of each storm, one row per storm.
-    pub rows: &'a [Vec<f64>],
-    /// The stream of `seed` each row's wind is drawn from, one per row.
-    pub storms: &'a [usize],
-    /// The seed whose streams the winds are drawn from.
-    pub seed: u64,
-    /// What a storm whose free run diverges does to the analysis.
-    pub on_divergence: OnDivergence,
-}
-
-/// What a storm whose metamodel free run diverges does to an analysis.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum OnDivergence {
-    /// The analysis fails, naming the sample (where every peak is needed: moments, Sobol indices).
-    Fail,
-    /// Its peak is taken as infinite: it exceeds every threshold (conservative; counted and reported
-    /// by the analyses that allow it).
-    Exceed,
 }
 
 /// At most this many diverged storms are named in an answer.
@@ -235,4 +210,29 @@ pub fn floor_peak_sets_at(
         )
         .collect::<Result<_>>()?;
     Ok(peaks.concat())
+}
+
+/// Storms on this machine's cores, in parallel.
+pub struct OnThisMachine;
+
+impl StormRunner for OnThisMachine {
+    fn pairs(
+        &self,
+        runs: &PairedRuns,
+        rows: &[Vec<f64>],
+        storms: &[usize],
+        observer: &dyn Observer,
+    ) -> Result<Vec<PairedPeak>> {
+        runs.run(rows, storms, observer)
+    }
+
+    fn floor_peak_sets(
+        &self,
+        metamodel: &Metamodel,
+        draws: &Draws,
+        responses: &[Response],
+        observer: &dyn Observer,
+    ) -> Result<Vec<Vec<f64>>> {
+        floor_peak_sets_at(metamodel, draws, responses, 0, observer)
+    }
 }

@@ -11,4 +11,5 @@ pub(super) mod draws;
 pub(super) mod exceedance;
 pub(super) mod reference_storms;
 pub(super) mod runner;
+pub(super) mod storms;
 pub(super) mod strata;

@@ -1,7 +1,7 @@
 //! Storms run through both the reference model and the metamodel, for certified answers: the same
 //! inputs and the same wind through each, the peaks of one response from each.
 
-use super::draws::{Draws, OnDivergence};
+use super::storms::{Draws, OnDivergence};
 use crate::analysis::responses::reference::reference_peak;
 use crate::analysis::responses::response::Response;
 use crate::dynamics::ModalMotion;

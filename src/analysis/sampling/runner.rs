@@ -1,11 +1,11 @@
 //! Where an answer's storms run. Storms are an answer's cost — a free run of the metamodel each,
 //! and for a certified answer a reference integration each for its reference storms — so the
 //! service spreads them over every replica's workers in chunks, while the command line runs them
-//! on this machine's cores ([`OnThisMachine`]). Whichever runs them, a storm's peaks depend only on
+//! on this machine's cores (`OnThisMachine`). Whichever runs them, a storm's peaks depend only on
 //! its row and its stream: the answer is the same to the bit.
 
-use super::draws::{Draws, floor_peak_sets_at};
 use super::reference_storms::{PairedPeak, PairedRuns};
+use super::storms::Draws;
 use crate::analysis::responses::response::Response;
 use crate::error::Result;
 use crate::progress::Observer;
@@ -32,29 +32,4 @@ pub trait StormRunner {
         responses: &[Response],
         observer: &dyn Observer,
     ) -> Result<Vec<Vec<f64>>>;
-}
-
-/// Storms on this machine's cores, in parallel.
-pub struct OnThisMachine;
-
-impl StormRunner for OnThisMachine {
-    fn pairs(
-        &self,
-        runs: &PairedRuns,
-        rows: &[Vec<f64>],
-        storms: &[usize],
-        observer: &dyn Observer,
-    ) -> Result<Vec<PairedPeak>> {
-        runs.run(rows, storms, observer)
-    }
-
-    fn floor_peak_sets(
-        &self,
-        metamodel: &Metamodel,
-        draws: &Draws,
-        responses: &[Response],
-        observer: &dyn Observer,
-    ) -> Result<Vec<Vec<f64>>> {
-        floor_peak_sets_at(metamodel, draws, responses, 0, observer)
-    }
 }
