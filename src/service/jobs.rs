@@ -209,7 +209,7 @@ async fn coordinate(
         let done = selection + (tasks * EXPERIMENTS_PER_TASK).min(remaining.len());
         supervision.progress(Progress::Experiments { done, total });
     };
-    for text in work_through_tasks(&state, &id, &owner, supervision.as_ref(), first, done).await? {
+    for text in work_through_tasks(&state, &id, &owner, supervision.as_ref(), first, tasks.len(), done).await? {
         let chunk: Vec<ExperimentFit> =
             serde_json::from_str(&text).map_err(|e| Error::Internal(format!("a stored task result: {e}")))?;
         fits.extend(chunk);
@@ -254,7 +254,7 @@ async fn choose_structures(
         through_faults(supervision.as_ref(), "queueing tasks", || state.store.insert_tasks(id, 0, &tasks)).await?;
         state.wake.notify_waiters();
         let done = |tasks: usize| supervision.progress(Progress::Structure { mode: (tasks + 1).min(modes) });
-        work_through_tasks(state, id, owner, supervision.as_ref(), 0, done).await?
+        work_through_tasks(state, id, owner, supervision.as_ref(), 0, tasks.len(), done).await?
     };
     let structures = outputs
         .iter()

@@ -289,6 +289,7 @@ pub(super) async fn work_through_tasks(
     owner: &str,
     supervision: &dyn Observer,
     first: i64,
+    count: usize,
     done: impl Fn(usize),
 ) -> Result<Vec<String>> {
     let store = &state.store;
@@ -316,7 +317,10 @@ pub(super) async fn work_through_tasks(
             None => tokio::time::sleep(Duration::from_millis(250)).await,
         }
     }
-    through_faults(supervision, "reading task results", || store.task_results(job_id, first)).await
+    // A job taken up again finds the later chunks of its earlier attempt too: only these are its.
+    let mut results = through_faults(supervision, "reading task results", || store.task_results(job_id, first)).await?;
+    results.truncate(count);
+    Ok(results)
 }
 
 /// A job's own tasks, queued from the job's blocking thread, which waits on the runtime while the
@@ -340,7 +344,7 @@ impl JobTasks {
         let outputs = self.runtime.block_on(async {
             through_faults(observer, "queueing tasks", || state.store.insert_tasks(job_id, first, requests)).await?;
             state.wake.notify_waiters();
-            work_through_tasks(state, job_id, &self.owner, observer, first, done).await
+            work_through_tasks(state, job_id, &self.owner, observer, first, requests.len(), done).await
         })?;
         if outputs.len() != requests.len() {
             return Err(Error::Internal(format!("{} tasks came back of {}", outputs.len(), requests.len())));
