@@ -104,6 +104,11 @@ impl Application {
             Role::All | Role::Worker => jobs::spawn_workers(self.state.clone(), self.state.config.workers),
         };
         let upkeep = tokio::spawn(prune_idempotency_keys(self.state.clone()));
+        // Only workers wait for work; an API replica has nobody to wake.
+        let relay = (!workers.is_empty()).then(|| {
+            let (store, wake) = (self.state.store.clone(), self.state.wake.clone());
+            tokio::spawn(async move { store.relay_announcements(wake).await })
+        });
         let draining = self.state.draining.clone();
         let app = routes::router(self.state.clone());
         axum::serve(self.listener, app)
@@ -114,6 +119,9 @@ impl Application {
             .await?;
         self.state.draining.store(true, Ordering::Relaxed);
         upkeep.abort();
+        if let Some(relay) = relay {
+            relay.abort();
+        }
         for worker in workers {
             let _ = worker.await;
         }

@@ -272,6 +272,9 @@ pub(super) async fn run_task(state: &AppState, owner: &str, task: TaskRow, paren
     if let Err(error) = recorded {
         tracing::error!(%error, "recording a task failed");
     }
+    // A job of this replica waiting for its tasks counts them again (another replica's job hears
+    // of it through the store's announcement).
+    state.wake.notify_waiters();
 }
 
 /// A failed task's error as its row keeps it: JSON, so that the job that queued it fails with the
@@ -280,9 +283,9 @@ fn task_failure(error: &Error) -> String {
     serde_json::to_string(error).expect("errors serialise")
 }
 
-/// Works on the job's tasks from chunk `first` on until every one is done, claiming them itself
-/// while idle workers of every replica claim them too, and tells `done` how many of them are done
-/// as they finish; then their outputs, by chunk.
+/// Works on the job's `count` tasks from chunk `first` on until every one is done, claiming them
+/// itself while idle workers of every replica claim them too, and tells `done` how many of them
+/// are done as they finish; then their outputs, by chunk.
 pub(super) async fn work_through_tasks(
     state: &AppState,
     job_id: &str,
@@ -293,16 +296,20 @@ pub(super) async fn work_through_tasks(
     done: impl Fn(usize),
 ) -> Result<Vec<String>> {
     let store = &state.store;
+    let chunks = first..first + count as i64;
     loop {
         if supervision.cancelled() {
             return Err(Error::Cancelled);
         }
-        let tally = through_faults(supervision, "counting tasks", || store.task_tally(job_id)).await?;
+        // Listening before counting: a task finished between the count and the wait still wakes it.
+        let woken = state.wake.notified();
+        tokio::pin!(woken);
+        woken.as_mut().enable();
+        let tally = through_faults(supervision, "counting tasks", || store.task_tally(job_id, chunks.clone())).await?;
         if let Some(failure) = tally.failure {
             return Err(serde_json::from_str(&failure).unwrap_or(Error::Internal(failure)));
         }
-        // The chunks before `first` are done: the job waited for them before queueing these.
-        done((tally.done - first).max(0) as usize);
+        done(tally.done as usize);
         if tally.done == tally.total {
             break;
         }
@@ -314,13 +321,17 @@ pub(super) async fn work_through_tasks(
                 let span = tracing::info_span!("task", chunk = task.chunk);
                 run_task(state, owner, task, Some(supervision)).instrument(span).await
             }
-            None => tokio::time::sleep(Duration::from_millis(250)).await,
+            // Another replica runs the rest: woken when a task finishes here or is announced
+            // finished by another replica, polled as a fallback.
+            None => {
+                tokio::select! {
+                    _ = woken => {}
+                    _ = tokio::time::sleep(Duration::from_millis(250)) => {}
+                }
+            }
         }
     }
-    // A job taken up again finds the later chunks of its earlier attempt too: only these are its.
-    let mut results = through_faults(supervision, "reading task results", || store.task_results(job_id, first)).await?;
-    results.truncate(count);
-    Ok(results)
+    through_faults(supervision, "reading task results", || store.task_results(job_id, chunks.clone())).await
 }
 
 /// A job's own tasks, queued from the job's blocking thread, which waits on the runtime while the

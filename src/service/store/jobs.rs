@@ -102,6 +102,7 @@ impl Store {
             .execute(&mut *tx)
             .await?;
         tx.commit().await?;
+        self.announce().await;
         Ok(Enqueued::New)
     }
 

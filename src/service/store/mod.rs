@@ -5,6 +5,7 @@
 //! claim: PostgreSQL skips rows another replica is claiming (`FOR UPDATE SKIP LOCKED`); SQLite
 //! has one writer at a time, so its plain claim cannot hand one job to two workers.
 
+mod announce;
 mod idempotency;
 mod jobs;
 mod metamodels;
@@ -29,6 +30,8 @@ const ACQUIRE_TIMEOUT: std::time::Duration = std::time::Duration::from_secs(3);
 pub struct Store {
     pool: AnyPool,
     backend: Backend,
+    /// Where to listen for the other replicas' announcements (PostgreSQL only).
+    postgres_url: Option<String>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -70,7 +73,8 @@ impl Store {
             .connect(&url)
             .await?;
         sqlx::migrate!().run(&pool).await?;
-        Ok(Store { pool, backend })
+        let postgres_url = (backend == Backend::Postgres).then_some(url);
+        Ok(Store { pool, backend, postgres_url })
     }
 
     /// Whether the database answers with the tables the service needs (a live connection to a

@@ -4,6 +4,7 @@
 
 use super::{Backend, MAX_ATTEMPTS, Store, now_ms};
 use sqlx::Row;
+use std::ops::Range;
 
 /// A task as claimed.
 #[derive(Debug, Clone)]
@@ -40,7 +41,9 @@ impl Store {
             .execute(&mut *tx)
             .await?;
         }
-        tx.commit().await
+        tx.commit().await?;
+        self.announce().await;
+        Ok(())
     }
 
     /// Claims a queued task (or one whose lease ran out) of a running, uncancelled job; of `job_id`
@@ -140,6 +143,7 @@ impl Store {
         .bind(owner)
         .execute(&self.pool)
         .await?;
+        self.announce().await;
         Ok(done.rows_affected() == 1)
     }
 
@@ -157,30 +161,45 @@ impl Store {
         Ok(())
     }
 
-    pub async fn task_tally(&self, job_id: &str) -> Result<TaskTally, sqlx::Error> {
-        let rows = sqlx::query("SELECT state, result FROM tasks WHERE job_id = $1 ORDER BY chunk")
-            .bind(job_id)
-            .fetch_all(&self.pool)
-            .await?;
-        let mut tally = TaskTally { total: rows.len() as i64, done: 0, failure: None };
-        for row in rows {
-            match row.try_get::<String, _>("state")?.as_str() {
-                "done" => tally.done += 1,
-                "failed" if tally.failure.is_none() => tally.failure = row.try_get("result")?,
-                _ => {}
-            }
-        }
-        Ok(tally)
+    /// Where a job's chunks `chunks` are: how many there are and are done (counted in the
+    /// database, no outputs read), and the reason of the first that failed. Only those chunks: a
+    /// job taken up again may find later chunks of its earlier attempt, which are not waited on.
+    pub async fn task_tally(&self, job_id: &str, chunks: Range<i64>) -> Result<TaskTally, sqlx::Error> {
+        let counts = sqlx::query(
+            "SELECT COUNT(*) AS total, COALESCE(SUM(CASE WHEN state = 'done' THEN 1 ELSE 0 END), 0) AS done \
+             FROM tasks WHERE job_id = $1 AND chunk >= $2 AND chunk < $3",
+        )
+        .bind(job_id)
+        .bind(chunks.start)
+        .bind(chunks.end)
+        .fetch_one(&self.pool)
+        .await?;
+        let failure = sqlx::query(
+            "SELECT result FROM tasks WHERE job_id = $1 AND chunk >= $2 AND chunk < $3 AND state = 'failed' \
+             ORDER BY chunk LIMIT 1",
+        )
+        .bind(job_id)
+        .bind(chunks.start)
+        .bind(chunks.end)
+        .fetch_optional(&self.pool)
+        .await?;
+        Ok(TaskTally {
+            total: counts.try_get("total")?,
+            done: counts.try_get("done")?,
+            failure: failure.map(|row| row.try_get("result")).transpose()?,
+        })
     }
 
-    /// The outputs of a job's done tasks from chunk `first` on, by chunk.
-    pub async fn task_results(&self, job_id: &str, first: i64) -> Result<Vec<String>, sqlx::Error> {
-        let rows =
-            sqlx::query("SELECT result FROM tasks WHERE job_id = $1 AND chunk >= $2 AND state = 'done' ORDER BY chunk")
-                .bind(job_id)
-                .bind(first)
-                .fetch_all(&self.pool)
-                .await?;
+    /// The outputs of a job's done chunks `chunks`, by chunk.
+    pub async fn task_results(&self, job_id: &str, chunks: Range<i64>) -> Result<Vec<String>, sqlx::Error> {
+        let rows = sqlx::query(
+            "SELECT result FROM tasks WHERE job_id = $1 AND chunk >= $2 AND chunk < $3 AND state = 'done' ORDER BY chunk",
+        )
+        .bind(job_id)
+        .bind(chunks.start)
+        .bind(chunks.end)
+        .fetch_all(&self.pool)
+        .await?;
         rows.iter().map(|r| r.try_get("result")).collect()
     }
 }

@@ -152,12 +152,16 @@ async fn tasks_of_a_running_job_are_shared_and_tallied() {
         assert!(!store.finish_task("j", 0, "w2", "done", "stolen").await.unwrap(), "{name}");
         assert!(store.finish_task("j", 0, "w1", "done", "r0").await.unwrap(), "{name}");
         assert!(store.finish_task("j", 1, "w2", "failed", "boom").await.unwrap(), "{name}");
-        let tally = store.task_tally("j").await.unwrap();
+        let tally = store.task_tally("j", 0..2).await.unwrap();
         assert_eq!(tally, TaskTally { total: 2, done: 1, failure: Some("boom".into()) }, "{name}");
-        assert_eq!(store.task_results("j", 0).await.unwrap(), vec!["r0".to_string()], "{name}");
+        assert_eq!(store.task_results("j", 0..2).await.unwrap(), vec!["r0".to_string()], "{name}");
         // A second attempt at the job: an unchanged chunk keeps its output, a changed one restarts.
         store.insert_tasks("j", 0, &["a".to_string(), "b2".to_string()]).await.unwrap();
-        assert_eq!(store.task_tally("j").await.unwrap(), TaskTally { total: 2, done: 1, failure: None });
+        assert_eq!(store.task_tally("j", 0..2).await.unwrap(), TaskTally { total: 2, done: 1, failure: None });
+        // A later chunk (an earlier attempt's, say) is neither counted nor read with these.
+        store.insert_tasks("j", 2, &["c".to_string()]).await.unwrap();
+        assert_eq!(store.task_tally("j", 0..2).await.unwrap(), TaskTally { total: 2, done: 1, failure: None });
+        assert_eq!(store.task_tally("j", 1..3).await.unwrap(), TaskTally { total: 2, done: 0, failure: None });
         // Cancelling the job withdraws its tasks from idle workers and from the one running them.
         let again = store.claim_task("w1", 60_000, None).await.unwrap().unwrap();
         store.request_cancel("j").await.unwrap();
