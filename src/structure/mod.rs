@@ -9,6 +9,7 @@ mod frame;
 mod modes;
 mod presets;
 mod sections;
+pub mod spatial;
 
 pub use custom::{CustomStructure, MAX_DAMPER_GROUPS, MAX_FLOORS};
 pub use frame::{FrameSpec, StoreySections};
@@ -68,17 +69,7 @@ impl Structure {
         check_square_symmetric("mass", &mass, n)?;
         check_positive_definite("stiffness", &stiffness)?;
         check_positive_definite("mass", &mass)?;
-        let mut below = 0.0;
-        for (j, &z) in floor_elevations.iter().enumerate() {
-            require_finite(&format!("floor_elevations_m[{j}]"), z)?;
-            if z <= below {
-                return Err(Error::invalid(
-                    format!("floor_elevations_m[{j}]"),
-                    format!("elevations must be positive and increasing, got {z} after {below}"),
-                ));
-            }
-            below = z;
-        }
+        check_elevations(&floor_elevations)?;
         if floor_widths.len() != n {
             return Err(Error::invalid(
                 "floor_widths_m",
@@ -118,11 +109,27 @@ impl Structure {
     }
 }
 
+/// Floor elevations must be finite, positive and increasing.
+fn check_elevations(floor_elevations: &[f64]) -> Result<()> {
+    let mut below = 0.0;
+    for (j, &z) in floor_elevations.iter().enumerate() {
+        require_finite(&format!("floor_elevations_m[{j}]"), z)?;
+        if z <= below {
+            return Err(Error::invalid(
+                format!("floor_elevations_m[{j}]"),
+                format!("elevations must be positive and increasing, got {z} after {below}"),
+            ));
+        }
+        below = z;
+    }
+    Ok(())
+}
+
 fn check_square_symmetric(field: &str, a: &Mat<f64>, n: usize) -> Result<()> {
     if a.nrows() != n || a.ncols() != n {
         return Err(Error::invalid(
             field,
-            format!("must be {n}×{n} (one row per floor), got {}×{}", a.nrows(), a.ncols()),
+            format!("must be {n}×{n} (one row per degree of freedom), got {}×{}", a.nrows(), a.ncols()),
         ));
     }
     let mut scale: f64 = 0.0;

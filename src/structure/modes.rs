@@ -52,30 +52,11 @@ impl Modes {
                 format!("must be between 1 and the number of floors ({n}), got {count}"),
             ));
         }
-        let llt = structure.mass.llt(Side::Lower).map_err(|_| Error::invalid("mass", "must be positive definite"))?;
-        let l = llt.L();
-        // C = L⁻¹ K L⁻ᵀ: solve L X = K, then L Cᵀ = Xᵀ.
-        let mut x = structure.stiffness.clone();
-        solve_lower_triangular_in_place(l, x.as_mut(), Par::Seq);
-        let mut c = x.transpose().to_owned();
-        solve_lower_triangular_in_place(l, c.as_mut(), Par::Seq);
-        let c = Mat::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
-        let eigen = c
-            .self_adjoint_eigen(Side::Lower)
-            .map_err(|_| Error::Numerical("the eigen-solver did not converge".into()))?;
-        let mut shapes = eigen.U().subcols(0, count).to_owned();
-        solve_upper_triangular_in_place(l.transpose(), shapes.as_mut(), Par::Seq);
+        let (eigenvalues, mut shapes) = lowest_eigenpairs(&structure.mass, &structure.stiffness, count)?;
         let roof = n - 1;
         let mut frequencies = Vec::with_capacity(count);
         let mut modal_masses = Vec::with_capacity(count);
-        for m in 0..count {
-            let lambda = eigen.S()[m];
-            if lambda <= 0.0 {
-                return Err(Error::invalid(
-                    "stiffness",
-                    "must be positive definite (a non-positive eigenvalue appeared)",
-                ));
-            }
+        for (m, &lambda) in eigenvalues.iter().enumerate() {
             let largest =
                 (0..n).map(|i| shapes[(i, m)]).fold(0.0, |a: f64, b: f64| if b.abs() > a.abs() { b } else { a });
             let mut r = shapes[(roof, m)];
@@ -125,6 +106,29 @@ impl Modes {
     pub fn periods(&self) -> Vec<f64> {
         self.frequencies.iter().map(|w| 2.0 * std::f64::consts::PI / w).collect()
     }
+}
+
+/// The `count` lowest eigenvalues ω² of K φ = ω² M φ, ascending, and their shapes (columns,
+/// M-orthonormal); refuses a mass that is not positive definite and a non-positive eigenvalue.
+pub(super) fn lowest_eigenpairs(mass: &Mat<f64>, stiffness: &Mat<f64>, count: usize) -> Result<(Vec<f64>, Mat<f64>)> {
+    let n = mass.nrows();
+    let llt = mass.llt(Side::Lower).map_err(|_| Error::invalid("mass", "must be positive definite"))?;
+    let l = llt.L();
+    // C = L⁻¹ K L⁻ᵀ: solve L X = K, then L Cᵀ = Xᵀ.
+    let mut x = stiffness.clone();
+    solve_lower_triangular_in_place(l, x.as_mut(), Par::Seq);
+    let mut c = x.transpose().to_owned();
+    solve_lower_triangular_in_place(l, c.as_mut(), Par::Seq);
+    let c = Mat::from_fn(n, n, |i, j| 0.5 * (c[(i, j)] + c[(j, i)]));
+    let eigen =
+        c.self_adjoint_eigen(Side::Lower).map_err(|_| Error::Numerical("the eigen-solver did not converge".into()))?;
+    let eigenvalues: Vec<f64> = (0..count).map(|m| eigen.S()[m]).collect();
+    if eigenvalues.iter().any(|&lambda| lambda <= 0.0) {
+        return Err(Error::invalid("stiffness", "must be positive definite (a non-positive eigenvalue appeared)"));
+    }
+    let mut shapes = eigen.U().subcols(0, count).to_owned();
+    solve_upper_triangular_in_place(l.transpose(), shapes.as_mut(), Par::Seq);
+    Ok((eigenvalues, shapes))
 }
 
 #[cfg(test)]

@@ -18,10 +18,10 @@ impl Store {
     /// Tells every replica listening that tasks were queued or finished (PostgreSQL only). A
     /// failed announcement is not an error of the caller's work: the polls find the change.
     pub(super) async fn announce(&self) {
-        if self.backend == Backend::Postgres {
-            if let Err(error) = sqlx::raw_sql(ANNOUNCE).execute(&self.pool).await {
-                tracing::warn!(%error, "announcing work to the other replicas failed");
-            }
+        if self.backend == Backend::Postgres
+            && let Err(error) = sqlx::raw_sql(ANNOUNCE).execute(&self.pool).await
+        {
+            tracing::warn!(%error, "announcing work to the other replicas failed");
         }
     }
 

@@ -1,0 +1,84 @@
+//! The modes of a three-dimensional building and how much of each is sway in x, sway in y and
+//! twist: a tall building's first modes are often coupled, and which one carries the torsion
+//! decides its corner accelerations.
+
+use super::{DOFS_PER_FLOOR, Dof, SpatialStructure, dof};
+use crate::error::{Error, Result};
+use crate::structure::modes::lowest_eigenpairs;
+use faer::Mat;
+
+/// The first modes of a [`SpatialStructure`], each shape scaled so that the roof's largest motion
+/// is 1: of its sway in x, its sway in y (m) and its twist times the roof plan's radius of
+/// gyration r (the displacement the twist gives a point at r from the centre of mass), whichever
+/// is largest in magnitude, taken positive. The modal coordinate y_m is then the roof's dominant
+/// motion carried by mode m, in metres, for sway and twist alike.
+#[derive(Debug, Clone)]
+pub struct SpatialModes {
+    /// Natural circular frequencies ω_m (rad/s), ascending.
+    pub frequencies: Vec<f64>,
+    /// Mode shapes, one column per mode, rows as [`dof`].
+    pub shapes: Mat<f64>,
+    /// Generalized masses M_m = φ_mᵀ M φ_m (kg).
+    pub modal_masses: Vec<f64>,
+    /// Each mode's shares of sway in x, sway in y and twist: the parts of φᵀ M φ carried by each
+    /// kind of degree of freedom (exact for a diagonal mass; the cross terms of a coupled mass
+    /// matrix are left out before the shares are scaled to sum to one).
+    pub shares: Vec<[f64; 3]>,
+}
+
+impl SpatialModes {
+    /// The first `count` modes of `structure` at its reference stiffness and unit mass factor.
+    pub fn of(structure: &SpatialStructure, count: usize) -> Result<SpatialModes> {
+        let size = structure.dofs();
+        if count == 0 || count > size {
+            return Err(Error::invalid(
+                "modes",
+                format!("must be between 1 and the number of degrees of freedom ({size}), got {count}"),
+            ));
+        }
+        let (eigenvalues, mut shapes) = lowest_eigenpairs(&structure.mass, &structure.stiffness, count)?;
+        let roof = structure.floors() - 1;
+        let radius = structure.plans[roof].radius_of_gyration();
+        let weights = [1.0, 1.0, radius];
+        let mut modal_masses = Vec::with_capacity(count);
+        let mut shares = Vec::with_capacity(count);
+        for m in 0..count {
+            let dominant = [Dof::X, Dof::Y, Dof::Rotation]
+                .iter()
+                .map(|&d| shapes[(dof(roof, d), m)] * weights[d as usize])
+                .fold(0.0, |a: f64, b: f64| if b.abs() > a.abs() { b } else { a });
+            if dominant == 0.0 {
+                return Err(Error::invalid(
+                    "modes",
+                    format!("mode {} of this structure leaves the roof at rest; retain fewer modes", m + 1),
+                ));
+            }
+            for i in 0..size {
+                shapes[(i, m)] /= dominant;
+            }
+            let phi = shapes.col(m);
+            modal_masses.push(phi.transpose() * &structure.mass * phi);
+            let mut parts = [0.0; DOFS_PER_FLOOR];
+            for (d, part) in parts.iter_mut().enumerate() {
+                for i in (d..size).step_by(DOFS_PER_FLOOR) {
+                    for j in (d..size).step_by(DOFS_PER_FLOOR) {
+                        *part += phi[i] * structure.mass[(i, j)] * phi[j];
+                    }
+                }
+            }
+            let total: f64 = parts.iter().sum();
+            shares.push(parts.map(|p| p / total));
+        }
+        Ok(SpatialModes { frequencies: eigenvalues.iter().map(|l| l.sqrt()).collect(), shapes, modal_masses, shares })
+    }
+
+    /// Number of modes.
+    pub fn count(&self) -> usize {
+        self.frequencies.len()
+    }
+
+    /// Mode m's motion of floor `floor` in direction `d`.
+    pub fn at(&self, m: usize, floor: usize, d: Dof) -> f64 {
+        self.shapes[(dof(floor, d), m)]
+    }
+}
