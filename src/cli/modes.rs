@@ -1,9 +1,13 @@
-//! `windmeta modes`: frequencies, periods, generalized masses and roof-normalised shapes.
+//! `windmeta modes`: frequencies, periods, generalized masses and roof-normalised shapes; for a
+//! three-dimensional building also each mode's shares of sway in x, sway in y and twist.
 
 use super::StudyArgs;
-use crate::error::Result;
+use crate::error::{Error, Result};
+use crate::structure::spatial::{Dof, SpatialModes, frame40_3d};
+use crate::study::SPATIAL_PRESETS;
 use clap::Args;
 use serde_json::json;
+use std::f64::consts::PI;
 
 /// The study whose modes `windmeta modes` prints, and in which form.
 #[derive(Debug, Clone, Args)]
@@ -14,10 +18,19 @@ pub struct ModesArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// The centre of mass's offset from the plan's centre, `X,Y` in metres (`frame40-3d` only).
+    #[arg(long, value_name = "X,Y", value_delimiter = ',', allow_negative_numbers = true)]
+    pub eccentricity: Option<Vec<f64>>,
 }
 
 /// Runs `windmeta modes`: a table of the modes, or JSON with `--json`.
 pub fn modes(args: &ModesArgs) -> Result<String> {
+    if args.study.spec.is_none() && SPATIAL_PRESETS.contains(&args.study.preset.as_str()) {
+        return spatial_modes(args);
+    }
+    if args.eccentricity.is_some() {
+        return Err(Error::invalid("eccentricity", "applies to the three-dimensional preset frame40-3d only"));
+    }
     let study = args.study.study()?;
     let modes = &study.modes;
     let shapes: Vec<Vec<f64>> =
@@ -54,5 +67,72 @@ pub fn modes(args: &ModesArgs) -> Result<String> {
         let row: Vec<String> = shapes.iter().map(|s| format!("{:>8.4}", s[j])).collect();
         out += &format!("{:>5}  {}\n", j + 1, row.join(" "));
     }
+    Ok(out)
+}
+
+/// The modes of the three-dimensional preset (three retained unless `--modes` says otherwise, up to
+/// the building's 120 degrees of freedom).
+fn spatial_modes(args: &ModesArgs) -> Result<String> {
+    let eccentricity = match args.eccentricity.as_deref() {
+        None => [0.0, 0.0],
+        Some([x, y]) => [*x, *y],
+        Some(_) => return Err(Error::invalid("eccentricity", "give two numbers, X,Y in metres")),
+    };
+    let building = frame40_3d(eccentricity)?;
+    let modes = SpatialModes::of(&building, args.study.modes.unwrap_or(6))?;
+    let name = &args.study.preset;
+    let floors = building.floors();
+    let component = |m: usize, d: Dof| -> Vec<f64> { (0..floors).map(|j| modes.at(m, j, d)).collect() };
+    if args.json {
+        let shapes: Vec<_> = (0..modes.count())
+            .map(|m| json!({"x_m": component(m, Dof::X), "y_m": component(m, Dof::Y), "rotation_rad": component(m, Dof::Rotation)}))
+            .collect();
+        let shares: Vec<_> = modes.shares.iter().map(|s| json!({"x": s[0], "y": s[1], "rotation": s[2]})).collect();
+        let value = json!({
+            "preset": name,
+            "eccentricity_m": eccentricity,
+            "frequencies_rad_s": modes.frequencies,
+            "periods_s": modes.frequencies.iter().map(|w| 2.0 * PI / w).collect::<Vec<_>>(),
+            "modal_masses_kg": modes.modal_masses,
+            "shares": shares,
+            "shapes": shapes,
+        });
+        return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
+    }
+    let plan = building.plans[floors - 1];
+    let mut out = format!(
+        "{name}: {floors} floors of {} m × {} m, roof at {:.1} m, centre of mass at ({}, {}) m from the plan's centre\n",
+        plan.breadth,
+        plan.depth,
+        building.floor_elevations[floors - 1],
+        eccentricity[0],
+        eccentricity[1]
+    );
+    out += "mode  ω (rad/s)  f (Hz)   T (s)   M_m (kg)    x      y      twist   roof (x, y, r·θ)\n";
+    let radius = plan.radius_of_gyration();
+    for m in 0..modes.count() {
+        let w = modes.frequencies[m];
+        let [x, y, twist] = modes.shares[m];
+        let roof = [
+            modes.at(m, floors - 1, Dof::X),
+            modes.at(m, floors - 1, Dof::Y),
+            radius * modes.at(m, floors - 1, Dof::Rotation),
+        ];
+        out += &format!(
+            "{:>4}  {:>9.4}  {:>6.4}  {:>6.3}  {:>10.4e}  {:>5.3}  {:>5.3}  {:>5.3}   ({:>6.3}, {:>6.3}, {:>6.3})\n",
+            m + 1,
+            w,
+            w / (2.0 * PI),
+            2.0 * PI / w,
+            modes.modal_masses[m],
+            x,
+            y,
+            twist,
+            roof[0],
+            roof[1],
+            roof[2]
+        );
+    }
+    out += "shares: each mode's parts of φᵀMφ in sway along x, along y and in twist; shapes with --json\n";
     Ok(out)
 }

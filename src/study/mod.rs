@@ -12,7 +12,7 @@ mod spec;
 mod storms;
 
 pub use inputs::{PhysicalParameters, WIND_SPEED};
-pub use presets::{DEFAULT_PRESET, PRESETS};
+pub use presets::{DEFAULT_PRESET, PRESETS, SPATIAL_PRESETS};
 pub use spec::StudySpec;
 pub use storms::{Order, StormRun, WindPath};
 

@@ -7,6 +7,9 @@ use crate::structure::{Structure, frame40};
 /// The built-in studies: the paper's frame with damper coefficients as printed (N·s/m) and the same
 /// numbers in kN·s/m, where the dampers really act.
 pub const PRESETS: [&str; 2] = ["frame40", "frame40-kn"];
+/// The built-in three-dimensional buildings: `windmeta modes` shows their modes; studies of them
+/// (wind from a direction, across-wind and torsional loads) are not available yet.
+pub const SPATIAL_PRESETS: [&str; 1] = ["frame40-3d"];
 /// The study a calibration request without a preset or a structure calibrates.
 pub const DEFAULT_PRESET: &str = "frame40-kn";
 
@@ -16,6 +19,16 @@ pub(super) fn resolve(spec: &StudySpec) -> Result<(String, Structure, f64)> {
     let (name, damper_scale) = match spec.preset.as_deref() {
         Some("frame40") => ("frame40", 1.0),
         Some("frame40-kn") => ("frame40-kn", 1000.0),
+        Some(spatial) if SPATIAL_PRESETS.contains(&spatial) => {
+            return Err(Error::invalid(
+                "preset",
+                format!(
+                    "`{spatial}` is a three-dimensional building: `windmeta modes --preset {spatial}` shows its modes, \
+                     but studies of three-dimensional buildings are not available yet; the presets are {}",
+                    PRESETS.join(", ")
+                ),
+            ));
+        }
         Some(other) => {
             return Err(Error::invalid(
                 "preset",

@@ -39,6 +39,30 @@ fn modes_reports_the_papers_frequencies() {
     assert!(v["modal_masses_kg"][0].as_f64().unwrap() > 1e6);
 }
 
+/// The three-dimensional preset: the plane frame's first mode in x and in y, then its twist at √3
+/// times its frequency (the closed form of the symmetric building); with an eccentricity along y
+/// the x-sway takes a share of twist; its studies are refused by name until they exist.
+#[test]
+fn modes_of_the_three_dimensional_preset_show_their_shares() {
+    let plane = json(&["modes", "--preset", "frame40", "--json"]);
+    let w1 = plane["frequencies_rad_s"][0].as_f64().unwrap();
+    let v = json(&["modes", "--preset", "frame40-3d", "--json", "--modes", "3"]);
+    let w: Vec<f64> = v["frequencies_rad_s"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    for (w, expected) in w.iter().zip([w1, w1, 3f64.sqrt() * w1]) {
+        assert!((w / expected - 1.0).abs() < 1e-9, "{w} vs {expected}");
+    }
+    for (m, kind) in ["x", "y", "rotation"].iter().enumerate() {
+        assert!((v["shares"][m][kind].as_f64().unwrap() - 1.0).abs() < 1e-9, "mode {}: {}", m + 1, v["shares"][m]);
+    }
+    assert_eq!(v["shapes"][0]["x_m"].as_array().unwrap().len(), 40);
+    let eccentric = json(&["modes", "--preset", "frame40-3d", "--json", "--eccentricity", "0,2.44"]);
+    let twist = eccentric["shares"][0]["rotation"].as_f64().unwrap();
+    assert!(twist > 1e-3 && twist < 0.1, "the first mode's twist share {twist}");
+    refused(&["modes", "--preset", "frame40-3d", "--eccentricity", "0,9"], "eccentricity_m");
+    refused(&["modes", "--preset", "frame40", "--eccentricity", "0,1"], "eccentricity");
+    refused(&["simulate", "--preset", "frame40-3d"], "three-dimensional");
+}
+
 #[test]
 fn simulate_is_reproducible_and_honours_fixed_inputs() {
     let args =

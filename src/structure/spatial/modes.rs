@@ -36,7 +36,13 @@ impl SpatialModes {
                 format!("must be between 1 and the number of degrees of freedom ({size}), got {count}"),
             ));
         }
-        let (eigenvalues, mut shapes) = lowest_eigenpairs(&structure.mass, &structure.stiffness, count)?;
+        // One more than asked, so that the last mode asked for is aligned with its twin too.
+        let solved = (count + 1).min(size);
+        let (mut eigenvalues, shapes) = lowest_eigenpairs(&structure.mass, &structure.stiffness, solved)?;
+        let mut shapes = shapes;
+        align_repeated(&structure.mass, &eigenvalues, &mut shapes);
+        let mut shapes = shapes.subcols(0, count).to_owned();
+        eigenvalues.truncate(count);
         let roof = structure.floors() - 1;
         let radius = structure.plans[roof].radius_of_gyration();
         let weights = [1.0, 1.0, radius];
@@ -80,5 +86,41 @@ impl SpatialModes {
     /// Mode m's motion of floor `floor` in direction `d`.
     pub fn at(&self, m: usize, floor: usize, d: Dof) -> f64 {
         self.shapes[(dof(floor, d), m)]
+    }
+}
+
+/// Modes of one frequency (a symmetric building's sway in x and in y) are any mix of each other
+/// as the eigen-solver returns them. Each pair of equal frequencies is turned within its plane to
+/// the two mixes with the least and the most sway along x (the eigenvectors of that share's 2 × 2
+/// quadratic form over the pair), which keeps the pair M-orthonormal and gives a symmetric
+/// building's modes along its axes.
+fn align_repeated(mass: &Mat<f64>, eigenvalues: &[f64], shapes: &mut Mat<f64>) {
+    let size = shapes.nrows();
+    let x_share = |a: usize, b: usize, shapes: &Mat<f64>| -> f64 {
+        let mut sum = 0.0;
+        for i in (0..size).step_by(DOFS_PER_FLOOR) {
+            for j in (0..size).step_by(DOFS_PER_FLOOR) {
+                sum += shapes[(i, a)] * mass[(i, j)] * shapes[(j, b)];
+            }
+        }
+        sum
+    };
+    let mut m = 0;
+    while m + 1 < eigenvalues.len() {
+        if (eigenvalues[m + 1] - eigenvalues[m]).abs() > 1e-9 * eigenvalues[m] {
+            m += 1;
+            continue;
+        }
+        // The rotation by α that diagonalises [[p, q], [q, r]]: tan 2α = 2q / (p − r); the first
+        // column then holds the larger share of x.
+        let (p, q, r) = (x_share(m, m, shapes), x_share(m, m + 1, shapes), x_share(m + 1, m + 1, shapes));
+        let alpha = 0.5 * (2.0 * q).atan2(p - r);
+        let (sin, cos) = alpha.sin_cos();
+        for i in 0..size {
+            let (a, b) = (shapes[(i, m)], shapes[(i, m + 1)]);
+            shapes[(i, m)] = cos * a + sin * b;
+            shapes[(i, m + 1)] = -sin * a + cos * b;
+        }
+        m += 2;
     }
 }
