@@ -55,14 +55,7 @@ pub fn frame40_3d(eccentricity: [f64; 2]) -> Result<SpatialStructure> {
         .dampers
         .iter()
         .flat_map(|d| {
-            frames.iter().map(move |&(direction, position)| PlanDamper {
-                lower_floor: d.lower_floor,
-                upper_floor: d.upper_floor,
-                cos_angle: d.cos_angle,
-                group: d.group,
-                direction,
-                position,
-            })
+            frames.iter().map(move |&(direction, position)| PlanDamper { placement: d.clone(), direction, position })
         })
         .collect();
     SpatialStructure::new(

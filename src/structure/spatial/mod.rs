@@ -17,7 +17,7 @@ pub use assembly::{PlanarSystem, StoreyProperties, assemble, from_storeys};
 pub use frame40::{FRAME40_3D_PLAN, frame40_3d};
 pub use modes::SpatialModes;
 
-use super::{check_positive_definite, check_square_symmetric};
+use super::{DamperPlacement, check_positive_definite, check_square_symmetric};
 use crate::error::{Error, Result, require_finite, require_positive};
 use faer::Mat;
 
@@ -70,18 +70,12 @@ impl FloorPlan {
 }
 
 /// A damper between two consecutive floors (or the ground and the first floor), acting along a
-/// direction of the plan at a point of it.
+/// direction of the plan at a point of it; its axial velocity is cos θ times the two floors'
+/// relative velocity at that point along that direction.
 #[derive(Debug, Clone, PartialEq)]
 pub struct PlanDamper {
-    /// Floor index (0-based) of the lower end; `None` is the ground.
-    pub lower_floor: Option<usize>,
-    /// Floor index (0-based) of the upper end.
-    pub upper_floor: usize,
-    /// Cosine of the brace angle to the horizontal: axial velocity = cos θ · relative velocity of
-    /// the two floors at the damper's point, along its direction.
-    pub cos_angle: f64,
-    /// Coefficient group (0-based); every damper of a group shares one uncertain coefficient.
-    pub group: usize,
+    /// Its floors, brace angle and coefficient group, as in a plane frame.
+    pub placement: DamperPlacement,
     /// Direction on the plan, counter-clockwise from x (radians).
     pub direction: f64,
     /// Where it sits on the plan, from the plan's centre (m).
@@ -159,19 +153,12 @@ impl SpatialStructure {
             }
         }
         require_positive("reference_youngs_modulus", reference_youngs_modulus)?;
-        let placements: Vec<super::DamperPlacement> = dampers
-            .iter()
-            .map(|d| super::DamperPlacement {
-                lower_floor: d.lower_floor,
-                upper_floor: d.upper_floor,
-                cos_angle: d.cos_angle,
-                group: d.group,
-            })
-            .collect();
+        let placements: Vec<DamperPlacement> = dampers.iter().map(|d| d.placement.clone()).collect();
         super::check_dampers(&placements, floors)?;
         for (k, d) in dampers.iter().enumerate() {
             require_finite(&format!("dampers[{k}].direction"), d.direction)?;
-            let plan = &plans[d.upper_floor];
+            let floor = d.placement.upper_floor;
+            let plan = &plans[floor];
             if !(d.position.iter().all(|p| p.is_finite()) && plan.holds(d.position)) {
                 return Err(Error::invalid(
                     format!("dampers[{k}].position"),
@@ -179,7 +166,7 @@ impl SpatialStructure {
                         "({}, {}) m lies outside floor {}'s {} × {} m plan",
                         d.position[0],
                         d.position[1],
-                        d.upper_floor + 1,
+                        floor + 1,
                         plan.breadth,
                         plan.depth
                     ),
@@ -209,7 +196,7 @@ impl SpatialStructure {
 
     /// Number of damper coefficient groups (one uncertain coefficient each).
     pub fn damper_groups(&self) -> usize {
-        self.dampers.iter().map(|d| d.group + 1).max().unwrap_or(0)
+        self.dampers.iter().map(|d| d.placement.group + 1).max().unwrap_or(0)
     }
 
     /// Floor `floor`'s corners from its centre of mass (m), counter-clockwise from (+B/2, +D/2).

@@ -2,6 +2,10 @@ use super::*;
 use crate::structure::{Modes, frame40};
 use std::f64::consts::FRAC_PI_2;
 
+fn ground_damper() -> crate::structure::DamperPlacement {
+    crate::structure::DamperPlacement { lower_floor: None, upper_floor: 0, cos_angle: 1.0, group: 0 }
+}
+
 fn relative(a: f64, b: f64) -> f64 {
     (a / b - 1.0).abs()
 }
@@ -158,14 +162,7 @@ fn a_storey_of_given_properties_has_the_closed_form_frequencies() {
 
 #[test]
 fn a_damper_sees_its_point_move_along_its_direction() {
-    let damper = PlanDamper {
-        lower_floor: None,
-        upper_floor: 0,
-        cos_angle: 1.0,
-        group: 0,
-        direction: FRAC_PI_2,
-        position: [12.2, 3.0],
-    };
+    let damper = PlanDamper { placement: ground_damper(), direction: FRAC_PI_2, position: [12.2, 3.0] };
     // Along y at x = 12.2 − 1 from a centre of mass at (1, 0): (0, 1, 11.2).
     let w = damper.weights([1.0, 0.0]);
     assert!(w[0].abs() < 1e-15 && (w[1] - 1.0).abs() < 1e-15 && (w[2] - 11.2).abs() < 1e-12, "{w:?}");
@@ -196,14 +193,7 @@ fn bad_buildings_are_refused_by_field() {
         field(from_storeys(&[StoreyProperties { torsional_stiffness: -1.0, ..storey([0.0, 0.0]) }], 1.0, vec![])),
         "storeys[0].torsional_stiffness_n_m_per_rad"
     );
-    let outside = PlanDamper {
-        lower_floor: None,
-        upper_floor: 0,
-        cos_angle: 1.0,
-        group: 0,
-        direction: 0.0,
-        position: [0.0, 7.0],
-    };
+    let outside = PlanDamper { placement: ground_damper(), direction: 0.0, position: [0.0, 7.0] };
     assert_eq!(field(from_storeys(&[storey([0.0, 0.0])], 1.0, vec![outside])), "dampers[0].position");
     assert_eq!(field(frame40_3d([0.0, 7.0])), "eccentricity_m");
     let small = frame40_3d([0.0, 0.0]).unwrap();
