@@ -17,6 +17,7 @@ use super::power::{power, sign_power};
 use crate::error::{Error, Result};
 use crate::linalg::{dot, multiply_into};
 use crate::structure::Structure;
+use crate::structure::spatial::{Dof, SpatialStructure, dof};
 use faer::MatRef;
 
 const MAX_NEWTON_ITERATIONS: usize = 100;
@@ -35,31 +36,15 @@ pub struct Dampers {
     pub coefficients: Vec<f64>,
     /// Exponent α of the law.
     pub exponent: f64,
-    /// Each damper's axial velocity as a combination of floor velocities: (floor, weight) pairs.
+    /// Each damper's axial velocity as a combination of the velocities of the degrees of freedom
+    /// (one per floor in a plane frame, [`dof`] in a three-dimensional building): (index, weight).
     pub floor_weights: Vec<Vec<(usize, f64)>>,
 }
 
 impl Dampers {
     /// `group_coefficients[g]` is the coefficient of every damper in group g.
     pub fn new(structure: &Structure, group_coefficients: &[f64], exponent: f64) -> Result<Self> {
-        if !(exponent.is_finite() && exponent > 0.0 && exponent <= 2.0) {
-            return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {exponent}")));
-        }
-        let groups = structure.damper_groups();
-        if group_coefficients.len() != groups {
-            return Err(Error::invalid(
-                "damper coefficients",
-                format!("{groups} groups need {groups} coefficients, got {}", group_coefficients.len()),
-            ));
-        }
-        for (g, &c) in group_coefficients.iter().enumerate() {
-            if !(c.is_finite() && c >= 0.0) {
-                return Err(Error::invalid(
-                    format!("inputs.damper_c{}", g + 1),
-                    format!("must be finite and ≥ 0, got {c}"),
-                ));
-            }
-        }
+        check_law(structure.damper_groups(), group_coefficients, exponent)?;
         let floor_weights = structure
             .dampers
             .iter()
@@ -72,6 +57,34 @@ impl Dampers {
             })
             .collect();
         let coefficients = structure.dampers.iter().map(|d| group_coefficients[d.group]).collect();
+        Ok(Dampers { coefficients, exponent, floor_weights })
+    }
+
+    /// The dampers of a three-dimensional building: each one's axial velocity is cos θ times the
+    /// relative velocity of its two floors at its point of the plan, along its direction, so its
+    /// row weighs both floors' sway and twist (degrees of freedom as [`dof`]).
+    pub fn spatial(structure: &SpatialStructure, group_coefficients: &[f64], exponent: f64) -> Result<Self> {
+        check_law(structure.damper_groups(), group_coefficients, exponent)?;
+        let floor_weights = structure
+            .dampers
+            .iter()
+            .map(|d| {
+                let placement = &d.placement;
+                let floor_row = |floor: usize, sign: f64| {
+                    let weights = d.weights(structure.centres_of_mass[floor]);
+                    [Dof::X, Dof::Y, Dof::Rotation]
+                        .into_iter()
+                        .filter(move |&k| weights[k as usize] != 0.0)
+                        .map(move |k| (dof(floor, k), sign * placement.cos_angle * weights[k as usize]))
+                };
+                let mut row: Vec<(usize, f64)> = floor_row(placement.upper_floor, 1.0).collect();
+                if let Some(lower) = placement.lower_floor {
+                    row.extend(floor_row(lower, -1.0));
+                }
+                row
+            })
+            .collect();
+        let coefficients = structure.dampers.iter().map(|d| group_coefficients[d.placement.group]).collect();
         Ok(Dampers { coefficients, exponent, floor_weights })
     }
 
@@ -99,6 +112,28 @@ impl Dampers {
             })
             .collect()
     }
+}
+
+/// The law's exponent lies in (0, 2] and each of the `groups` coefficients is finite and ≥ 0.
+fn check_law(groups: usize, group_coefficients: &[f64], exponent: f64) -> Result<()> {
+    if !(exponent.is_finite() && exponent > 0.0 && exponent <= 2.0) {
+        return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {exponent}")));
+    }
+    if group_coefficients.len() != groups {
+        return Err(Error::invalid(
+            "damper coefficients",
+            format!("{groups} groups need {groups} coefficients, got {}", group_coefficients.len()),
+        ));
+    }
+    for (g, &c) in group_coefficients.iter().enumerate() {
+        if !(c.is_finite() && c >= 0.0) {
+            return Err(Error::invalid(
+                format!("inputs.damper_c{}", g + 1),
+                format!("must be finite and ≥ 0, got {c}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// out = x − y.

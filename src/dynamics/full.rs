@@ -11,6 +11,7 @@ use crate::linalg::{cholesky, cholesky_solve, multiply_into};
 use crate::progress::{CHECK_EVERY_STEPS, Observer, check};
 use crate::structure::{Modes, Structure};
 use crate::wind::FloorForces;
+use faer::Mat;
 
 /// The motion of every floor, `[floor][step]`: displacements (m), and Newmark's own velocities
 /// (m/s) and accelerations (m/s²), which satisfy the equations of motion at every step; no
@@ -28,7 +29,7 @@ pub struct FloorResponse {
 /// M, C and K of one sample, row-major.
 #[derive(Debug, Clone)]
 pub struct FullSystem {
-    /// Degrees of freedom n, one per floor.
+    /// Degrees of freedom n: one per floor of a plane frame, three of a three-dimensional building.
     pub size: usize,
     /// Mass matrix M (kg), n×n.
     pub mass: Vec<f64>,
@@ -48,10 +49,30 @@ impl FullSystem {
         mass_factor: f64,
         damping_ratio: f64,
     ) -> Self {
-        let n = structure.floors();
+        Self::from_matrices(
+            &structure.mass,
+            &structure.stiffness,
+            all_modes,
+            stiffness_factor,
+            mass_factor,
+            damping_ratio,
+        )
+    }
+
+    /// The same from the nominal mass and stiffness matrices over any degrees of freedom (a
+    /// plane frame's floors, a three-dimensional building's sway and twist) and their N modes.
+    pub fn from_matrices(
+        nominal_mass: &Mat<f64>,
+        nominal_stiffness: &Mat<f64>,
+        all_modes: &Modes,
+        stiffness_factor: f64,
+        mass_factor: f64,
+        damping_ratio: f64,
+    ) -> Self {
+        let n = nominal_mass.nrows();
         let modes = all_modes.scaled(stiffness_factor, mass_factor);
-        let mass: Vec<f64> = (0..n * n).map(|k| mass_factor * structure.mass[(k / n, k % n)]).collect();
-        let stiffness: Vec<f64> = (0..n * n).map(|k| stiffness_factor * structure.stiffness[(k / n, k % n)]).collect();
+        let mass: Vec<f64> = (0..n * n).map(|k| mass_factor * nominal_mass[(k / n, k % n)]).collect();
+        let stiffness: Vec<f64> = (0..n * n).map(|k| stiffness_factor * nominal_stiffness[(k / n, k % n)]).collect();
         // M φ_r for every mode r, then C = Σ_r (2ζω_r/M_r) (Mφ_r)(Mφ_r)ᵀ.
         let mut damping = vec![0.0; n * n];
         for r in 0..modes.count() {

@@ -8,6 +8,8 @@ mod modal;
 mod modal_lanes;
 mod motion;
 mod power;
+#[cfg(test)]
+mod spatial_checks;
 
 pub use damper::{Dampers, ImplicitDamperSolve};
 pub use full::{FloorResponse, FullSystem, integrate_full};

@@ -4,6 +4,7 @@
 
 use super::StormGrid;
 use super::spectral::CoarseSeries;
+use crate::structure::spatial::SpatialStructure;
 use faer::MatRef;
 
 /// Total wind force on every floor over a storm.
@@ -25,6 +26,27 @@ pub struct ModalForces {
 }
 
 impl FloorForces {
+    /// The three-dimensional building's floor loads of these forces acting along the unit vector
+    /// `direction` (cos β, sin β) at each plan's centre: on every floor the two components
+    /// and their moment about the floor's centre of mass, as [`dof`](crate::structure::spatial::dof)
+    /// numbers them. The along-wind drag of a plane study so placed drives the building as the
+    /// plane frame (the check that the three-dimensional model reduces to it).
+    pub fn on_plan(&self, direction: [f64; 2], structure: &SpatialStructure) -> FloorForces {
+        let [cos, sin] = direction;
+        // The centre lies at −e from the centre of mass: moment (−e_x) F sin β − (−e_y) F cos β.
+        let arms: Vec<[f64; 3]> =
+            structure.centres_of_mass.iter().map(|e| [cos, sin, e[1] * cos - e[0] * sin]).collect();
+        let place =
+            |values: &[f64]| -> Vec<f64> { values.iter().zip(&arms).flat_map(|(f, arm)| arm.map(|a| a * f)).collect() };
+        let series = self
+            .series
+            .iter()
+            .zip(&arms)
+            .flat_map(|(floor, arm)| arm.map(|a| floor.iter().map(|f| a * f).collect::<Vec<f64>>()))
+            .collect();
+        FloorForces { mean: place(&self.mean), series }
+    }
+
     /// Q_m(t) = Σ_j Φ_jm f_j(t).
     pub fn project(&self, shapes: MatRef<'_, f64>) -> ModalForces {
         let modes = shapes.ncols();

@@ -15,8 +15,8 @@ use faer::Mat;
 pub struct PlanarSystem {
     /// Condensed lateral stiffness (N/m), one row per floor, at the building's reference modulus.
     pub stiffness: Mat<f64>,
-    /// Direction of its line on the plan, counter-clockwise from x (radians).
-    pub direction: f64,
+    /// The unit vector along its line on the plan, (cos β, sin β) with β counter-clockwise from x.
+    pub direction: [f64; 2],
     /// A point of its line, from the plan's centre (m).
     pub position: [f64; 2],
 }
@@ -24,7 +24,7 @@ pub struct PlanarSystem {
 impl PlanarSystem {
     /// Its weights on each floor's (u_x, u_y, θ) about the floors' centres of mass.
     fn weights(&self, centres_of_mass: &[[f64; 2]]) -> Vec<[f64; 3]> {
-        let (sin, cos) = self.direction.sin_cos();
+        let [cos, sin] = self.direction;
         centres_of_mass
             .iter()
             .map(|c| {
@@ -113,8 +113,8 @@ pub fn from_storeys(
     }
     let centres: Vec<[f64; 2]> = storeys.iter().map(|s| s.centre_of_mass).collect();
     let lines = [
-        (0.0, storeys.iter().map(|s| s.stiffness_x).collect::<Vec<_>>()),
-        (std::f64::consts::FRAC_PI_2, storeys.iter().map(|s| s.stiffness_y).collect()),
+        ([1.0, 0.0], storeys.iter().map(|s| s.stiffness_x).collect::<Vec<_>>()),
+        ([0.0, 1.0], storeys.iter().map(|s| s.stiffness_y).collect()),
     ];
     let systems: Vec<PlanarSystem> = lines
         .into_iter()

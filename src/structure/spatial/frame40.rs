@@ -14,7 +14,6 @@ use super::{FloorPlan, PlanDamper, PlanarSystem, SpatialStructure, assemble, dof
 use crate::error::{Error, Result};
 use crate::structure::frame40;
 use faer::Mat;
-use std::f64::consts::FRAC_PI_2;
 
 /// The plan of every floor: 24.4 m × 24.4 m.
 pub const FRAME40_3D_PLAN: FloorPlan = FloorPlan { breadth: 24.4, depth: 24.4 };
@@ -37,7 +36,8 @@ pub fn frame40_3d(eccentricity: [f64; 2]) -> Result<SpatialStructure> {
     let half = 0.5 * FRAME40_3D_PLAN.breadth;
     let centres = vec![eccentricity; floors];
     // (direction, the frame's line through this point)
-    let frames = [(0.0, [0.0, half]), (0.0, [0.0, -half]), (FRAC_PI_2, [half, 0.0]), (FRAC_PI_2, [-half, 0.0])];
+    let (along_x, along_y) = ([1.0, 0.0], [0.0, 1.0]);
+    let frames = [(along_x, [0.0, half]), (along_x, [0.0, -half]), (along_y, [half, 0.0]), (along_y, [-half, 0.0])];
     let systems: Vec<PlanarSystem> = frames
         .iter()
         .map(|&(direction, position)| PlanarSystem { stiffness: plane.stiffness.clone(), direction, position })

@@ -76,8 +76,9 @@ impl FloorPlan {
 pub struct PlanDamper {
     /// Its floors, brace angle and coefficient group, as in a plane frame.
     pub placement: DamperPlacement,
-    /// Direction on the plan, counter-clockwise from x (radians).
-    pub direction: f64,
+    /// The unit vector it acts along on the plan, (cos β, sin β) with β counter-clockwise from x
+    /// ([`plan_direction`] from degrees).
+    pub direction: [f64; 2],
     /// Where it sits on the plan, from the plan's centre (m).
     pub position: [f64; 2],
 }
@@ -87,7 +88,7 @@ impl PlanDamper {
     /// (u_x, u_y, θ) about a centre of mass at `centre_of_mass` (from the plan's centre): its lever
     /// arm in torsion is the third weight.
     pub fn weights(&self, centre_of_mass: [f64; 2]) -> [f64; 3] {
-        let (sin, cos) = self.direction.sin_cos();
+        let [cos, sin] = self.direction;
         let (x, y) = (self.position[0] - centre_of_mass[0], self.position[1] - centre_of_mass[1]);
         [cos, sin, sin * x - cos * y]
     }
@@ -156,7 +157,7 @@ impl SpatialStructure {
         let placements: Vec<DamperPlacement> = dampers.iter().map(|d| d.placement.clone()).collect();
         super::check_dampers(&placements, floors)?;
         for (k, d) in dampers.iter().enumerate() {
-            require_finite(&format!("dampers[{k}].direction"), d.direction)?;
+            check_direction(&format!("dampers[{k}].direction"), d.direction)?;
             let floor = d.placement.upper_floor;
             let plan = &plans[floor];
             if !(d.position.iter().all(|p| p.is_finite()) && plan.holds(d.position)) {
@@ -204,6 +205,36 @@ impl SpatialStructure {
         let centre = self.centres_of_mass[floor];
         self.plans[floor].corners().map(|[x, y]| [x - centre[0], y - centre[1]])
     }
+}
+
+/// The unit vector (cos β, sin β) of a direction β in degrees counter-clockwise from the plan's x
+/// axis, exact along the axes: a damper along y must not see the x-sway through cos 90° ≈ 6·10⁻¹⁷,
+/// which the power law |v|^α (α < 1) would lift to a force a millionth of its own.
+pub fn plan_direction(degrees: f64) -> [f64; 2] {
+    let quarter = degrees / 90.0;
+    if quarter == quarter.round() {
+        match (quarter.rem_euclid(4.0)) as u8 {
+            0 => [1.0, 0.0],
+            1 => [0.0, 1.0],
+            2 => [-1.0, 0.0],
+            _ => [0.0, -1.0],
+        }
+    } else {
+        let (sin, cos) = degrees.to_radians().sin_cos();
+        [cos, sin]
+    }
+}
+
+/// A direction must be a finite unit vector.
+fn check_direction(field: &str, direction: [f64; 2]) -> Result<()> {
+    let length = direction[0].hypot(direction[1]);
+    if !(length.is_finite() && (length - 1.0).abs() <= 1e-9) {
+        return Err(Error::invalid(
+            field,
+            format!("must be a unit vector (cos β, sin β), got ({}, {})", direction[0], direction[1]),
+        ));
+    }
+    Ok(())
 }
 
 fn per_floor(field: &str, entries: usize, floors: usize) -> Result<()> {

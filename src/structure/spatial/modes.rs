@@ -4,6 +4,7 @@
 
 use super::{DOFS_PER_FLOOR, Dof, SpatialStructure, dof};
 use crate::error::{Error, Result};
+use crate::structure::Modes;
 use crate::structure::modes::lowest_eigenpairs;
 use faer::Mat;
 
@@ -29,6 +30,17 @@ pub struct SpatialModes {
 impl SpatialModes {
     /// The first `count` modes of `structure` at its reference stiffness and unit mass factor.
     pub fn of(structure: &SpatialStructure, count: usize) -> Result<SpatialModes> {
+        Self::solve(structure, count, true)
+    }
+
+    /// Every mode of the building, for its classical damping matrix, which does not depend on how a
+    /// shape is scaled: a high mode that leaves the roof at rest is scaled to a unit largest
+    /// component instead of being refused.
+    pub fn all(structure: &SpatialStructure) -> Result<SpatialModes> {
+        Self::solve(structure, structure.dofs(), false)
+    }
+
+    fn solve(structure: &SpatialStructure, count: usize, roof_must_move: bool) -> Result<SpatialModes> {
         let size = structure.dofs();
         if count == 0 || count > size {
             return Err(Error::invalid(
@@ -53,14 +65,20 @@ impl SpatialModes {
                 .iter()
                 .map(|&d| shapes[(dof(roof, d), m)] * weights[d as usize])
                 .fold(0.0, |a: f64, b: f64| if b.abs() > a.abs() { b } else { a });
-            if dominant == 0.0 {
+            let largest =
+                (0..size).map(|i| shapes[(i, m)]).fold(0.0, |a: f64, b: f64| if b.abs() > a.abs() { b } else { a });
+            let scale = if dominant.abs() > 1e-9 * largest.abs() {
+                dominant
+            } else if roof_must_move {
                 return Err(Error::invalid(
                     "modes",
                     format!("mode {} of this structure leaves the roof at rest; retain fewer modes", m + 1),
                 ));
-            }
+            } else {
+                largest
+            };
             for i in 0..size {
-                shapes[(i, m)] /= dominant;
+                shapes[(i, m)] /= scale;
             }
             let phi = shapes.col(m);
             modal_masses.push(phi.transpose() * &structure.mass * phi);
@@ -81,6 +99,16 @@ impl SpatialModes {
     /// Number of modes.
     pub fn count(&self) -> usize {
         self.frequencies.len()
+    }
+
+    /// The same modes as the reduced-order and full-order integrators take them: shapes over the
+    /// degrees of freedom ([`dof`]), frequencies and generalized masses.
+    pub fn modes(&self) -> Modes {
+        Modes {
+            frequencies: self.frequencies.clone(),
+            shapes: self.shapes.clone(),
+            modal_masses: self.modal_masses.clone(),
+        }
     }
 
     /// Mode m's motion of floor `floor` in direction `d`.

@@ -1,6 +1,5 @@
 use super::*;
 use crate::structure::{Modes, frame40};
-use std::f64::consts::FRAC_PI_2;
 
 fn ground_damper() -> crate::structure::DamperPlacement {
     crate::structure::DamperPlacement { lower_floor: None, upper_floor: 0, cos_angle: 1.0, group: 0 }
@@ -162,11 +161,11 @@ fn a_storey_of_given_properties_has_the_closed_form_frequencies() {
 
 #[test]
 fn a_damper_sees_its_point_move_along_its_direction() {
-    let damper = PlanDamper { placement: ground_damper(), direction: FRAC_PI_2, position: [12.2, 3.0] };
+    let damper = PlanDamper { placement: ground_damper(), direction: plan_direction(90.0), position: [12.2, 3.0] };
     // Along y at x = 12.2 − 1 from a centre of mass at (1, 0): (0, 1, 11.2).
     let w = damper.weights([1.0, 0.0]);
-    assert!(w[0].abs() < 1e-15 && (w[1] - 1.0).abs() < 1e-15 && (w[2] - 11.2).abs() < 1e-12, "{w:?}");
-    let along_x = PlanDamper { direction: 0.0, ..damper };
+    assert_eq!(w, [0.0, 1.0, 11.2]);
+    let along_x = PlanDamper { direction: plan_direction(0.0), ..damper };
     // Along x at y = 3 from the centre of mass: u_x − 3θ.
     assert_eq!(along_x.weights([1.0, 0.0]), [1.0, 0.0, -3.0]);
 }
@@ -193,7 +192,7 @@ fn bad_buildings_are_refused_by_field() {
         field(from_storeys(&[StoreyProperties { torsional_stiffness: -1.0, ..storey([0.0, 0.0]) }], 1.0, vec![])),
         "storeys[0].torsional_stiffness_n_m_per_rad"
     );
-    let outside = PlanDamper { placement: ground_damper(), direction: 0.0, position: [0.0, 7.0] };
+    let outside = PlanDamper { placement: ground_damper(), direction: [1.0, 0.0], position: [0.0, 7.0] };
     assert_eq!(field(from_storeys(&[storey([0.0, 0.0])], 1.0, vec![outside])), "dampers[0].position");
     assert_eq!(field(frame40_3d([0.0, 7.0])), "eccentricity_m");
     let small = frame40_3d([0.0, 0.0]).unwrap();
