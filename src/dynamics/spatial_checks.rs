@@ -25,11 +25,6 @@ fn plane_storm() -> FloorForces {
     loads.floor_forces(35.0, &storm, &mut rng_from_seed(7)).unwrap()
 }
 
-fn doubled(forces: &FloorForces) -> FloorForces {
-    let twice = |v: &[f64]| v.iter().map(|f| 2.0 * f).collect::<Vec<f64>>();
-    FloorForces { mean: twice(&forces.mean), series: forces.series.iter().map(|s| twice(s)).collect() }
-}
-
 /// The largest difference between two histories over the larger one's peak, and that peak.
 fn relative_difference(a: &[f64], b: &[f64]) -> f64 {
     let peak = a.iter().chain(b).fold(0.0, |m: f64, v| m.max(v.abs()));
@@ -55,7 +50,7 @@ fn the_building_driven_along_x_sways_as_the_plane_frame_through_the_reduced_mode
     // Eight modes hold the plane frame's three in x (1, 4, 6) with their twins in y and two twists.
     let modes = SpatialModes::of(&building, 8).unwrap().modes();
     let dampers = Dampers::spatial(&building, &COEFFICIENTS, EXPONENT).unwrap();
-    let forces = doubled(&storm).on_plan([1.0, 0.0], &building).project(modes.shapes.as_ref());
+    let forces = storm.scaled(2.0).on_plan([1.0, 0.0], &building).project(modes.shapes.as_ref());
     let run = integrate_reduced(&modes, DAMPING_RATIO, &dampers, &forces, TIME_STEP, &Silent).unwrap();
     let roof = |d: Dof| -> Vec<f64> {
         let row = dof(39, d);
@@ -87,8 +82,8 @@ fn the_building_driven_along_x_sways_as_the_plane_frame_through_the_full_model()
     let all = SpatialModes::all(&building).unwrap().modes();
     let system = FullSystem::from_matrices(&building.mass, &building.stiffness, &all, 1.0, 1.0, DAMPING_RATIO);
     let dampers = Dampers::spatial(&building, &COEFFICIENTS, EXPONENT).unwrap();
-    let run =
-        integrate_full(&system, &dampers, &doubled(&storm).on_plan([1.0, 0.0], &building), TIME_STEP, &Silent).unwrap();
+    let run = integrate_full(&system, &dampers, &storm.scaled(2.0).on_plan([1.0, 0.0], &building), TIME_STEP, &Silent)
+        .unwrap();
     for floor in [19, 39] {
         let x = &run.displacements[dof(floor, Dof::X)];
         let difference = relative_difference(x, &plane_run.displacements[floor]);
@@ -113,7 +108,7 @@ fn an_eccentric_building_twists_under_drag_along_x() {
     let storm = plane_storm();
     let modes = SpatialModes::of(&building, 8).unwrap().modes();
     let dampers = Dampers::spatial(&building, &COEFFICIENTS, EXPONENT).unwrap();
-    let forces = doubled(&storm).on_plan([1.0, 0.0], &building);
+    let forces = storm.scaled(2.0).on_plan([1.0, 0.0], &building);
     // The drag acts at the plan's centre, 2.44 m below the centre of mass in y: its moment about
     // the centre of mass is 2.44 m times the force, on every floor.
     for (j, mean) in storm.mean.iter().enumerate() {

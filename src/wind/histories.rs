@@ -26,6 +26,12 @@ pub struct ModalForces {
 }
 
 impl FloorForces {
+    /// The same forces times `factor` (a wider façade under the same wind, say).
+    pub fn scaled(&self, factor: f64) -> FloorForces {
+        let scale = |values: &[f64]| values.iter().map(|f| factor * f).collect::<Vec<f64>>();
+        FloorForces { mean: scale(&self.mean), series: self.series.iter().map(|s| scale(s)).collect() }
+    }
+
     /// The three-dimensional building's floor loads of these forces acting along the unit vector
     /// `direction` (cos β, sin β) at each plan's centre: on every floor the two components
     /// and their moment about the floor's centre of mass, as [`dof`](crate::structure::spatial::dof)

@@ -289,7 +289,11 @@ fn bench_reports_rows_and_headline_figures() {
     assert!((lanes - alone / in_lanes).abs() <= 1e-9 * lanes);
     // Every target is reported with its figure, and none is judged at sizes it was not set for.
     let targets = report["targets"].as_array().unwrap();
-    assert_eq!(targets.len(), 11, "{targets:?}");
+    assert_eq!(targets.len(), 12, "{targets:?}");
+    let spatial = stage("per sample: reduced-order reference of frame40-3d (6 modes, 160 dampers)");
+    let figure =
+        targets.iter().find(|t| t["figure"].as_str().unwrap().starts_with("reduced reference of frame40-3d")).unwrap();
+    assert!((figure["measured"].as_f64().unwrap() - spatial / reduced).abs() <= 1e-9 * spatial / reduced);
     assert!(targets.iter().all(|t| t["met"].is_null() && t["measured"].as_f64().unwrap() > 0.0), "{targets:?}");
     let calibration = targets.iter().find(|t| t["figure"] == "calibration, K = 24").unwrap();
     assert_eq!(calibration["measured"].as_f64().unwrap(), stage("calibration, K = 24"));
