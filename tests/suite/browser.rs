@@ -200,12 +200,20 @@ async fn download(browser: &Client, driver: &Driver, selector: &str) -> String {
     let path = driver.downloads.join(&name);
     let _ = std::fs::remove_file(&path);
     link.click().await.unwrap();
+    // Chromium writes the download to a `.crdownload` file and renames it over the final name when
+    // complete, but may place an empty file under the final name when it starts: the download is
+    // done when the file has content and no partial file is left (every download here has content).
+    let partial_left = || {
+        std::fs::read_dir(&driver.downloads)
+            .map(|entries| entries.flatten().any(|e| e.file_name().to_string_lossy().ends_with(".crdownload")))
+            .unwrap_or(false)
+    };
+    let saved = || std::fs::metadata(&path).is_ok_and(|m| m.len() > 0) && !partial_left();
     let started = Instant::now();
-    while !path.exists() {
+    while !saved() {
         assert!(started.elapsed() < Duration::from_secs(20), "{name} was not saved");
         tokio::time::sleep(Duration::from_millis(50)).await;
     }
-    // The browser writes a partial file first and renames it when complete.
     std::fs::read_to_string(&path).unwrap()
 }
 
