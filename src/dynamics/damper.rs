@@ -191,9 +191,7 @@ impl ImplicitDamperSolve {
     /// Velocities G s and their powers |v|^α, the powers by [`power`] in a pass of their own so
     /// that it vectorises (`powf` was a fifth of a calibration's time, in these solves).
     fn evaluate(&self, s: &[f64], velocities: &mut [f64], powers: &mut [f64]) {
-        for (v, row) in velocities.iter_mut().zip(self.model.rows()) {
-            *v = row.iter().map(|&(i, w)| w * s[i]).sum();
-        }
+        self.model.map().velocities(s, velocities);
         for (p, v) in powers.iter_mut().zip(velocities.iter()) {
             *p = power(v.abs(), self.exponent);
         }
@@ -216,11 +214,7 @@ impl ImplicitDamperSolve {
     fn gradient_and_forces(&mut self, forces: &mut [f64]) {
         self.forces_at_iterate(forces);
         self.gradient.copy_from_slice(&self.residual);
-        for (row, f) in self.model.rows().iter().zip(forces.iter()) {
-            for &(i, wi) in row {
-                self.gradient[i] += wi * f;
-            }
-        }
+        self.model.map().add_transposed(forces, &mut self.gradient);
     }
 
     /// The model's damper weights w_d = c·|v|^{α−1}, times α for the tangent; velocities below
@@ -261,6 +255,12 @@ impl ImplicitDamperSolve {
         } else {
             self.evaluate_iterate(s);
         }
+    }
+
+    /// out = Gᵀ `forces`: the damper forces on the unknowns (the modes of a reduced model).
+    pub fn generalized_forces(&self, forces: &[f64], out: &mut [f64]) {
+        out.iter_mut().for_each(|x| *x = 0.0);
+        self.model.map().add_transposed(forces, out);
     }
 
     /// Solves for the new velocities. `s` holds the initial guess on entry and the solution on exit;

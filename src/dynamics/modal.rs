@@ -123,7 +123,7 @@ pub fn integrate_reduced(
     let w_inverse: Vec<f64> = (0..count * count)
         .map(|k| if k % (count + 1) == 0 { masses[k / count] / coefficients[k / count].gamma1[1] } else { 0.0 })
         .collect();
-    let mut solver = ImplicitDamperSolve::new(w_inverse, map.clone(), dampers);
+    let mut solver = ImplicitDamperSolve::new(w_inverse, map, dampers);
 
     let mut y: Vec<f64> = (0..count).map(|m| forces.mean[m] / (masses[m] * modes.frequencies[m].powi(2))).collect();
     let mut v = vec![0.0; count];
@@ -164,12 +164,7 @@ pub fn integrate_reduced(
         }
         if active {
             solver.solve(&a, &mut s, &mut damper_forces)?;
-            modal_damper_force.iter_mut().for_each(|g| *g = 0.0);
-            for (row, f) in map.iter().zip(&damper_forces) {
-                for &(m, w) in row {
-                    modal_damper_force[m] += w * f;
-                }
-            }
+            solver.generalized_forces(&damper_forces, &mut modal_damper_force);
         }
         for m in 0..count {
             let c = &coefficients[m];
