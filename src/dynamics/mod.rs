@@ -2,6 +2,7 @@
 //! reduced-order (retained modes) and full-order (every floor).
 
 mod damper;
+mod damper_map;
 mod factored;
 mod full;
 mod modal;
@@ -10,6 +11,8 @@ mod motion;
 mod power;
 #[cfg(test)]
 mod spatial_checks;
+#[cfg(test)]
+mod spatial_random_vibration;
 
 pub use damper::{Dampers, ImplicitDamperSolve};
 pub use full::{FloorResponse, FullSystem, integrate_full};

@@ -50,7 +50,7 @@ fn the_building_driven_along_x_sways_as_the_plane_frame_through_the_reduced_mode
     // Eight modes hold the plane frame's three in x (1, 4, 6) with their twins in y and two twists.
     let modes = SpatialModes::of(&building, 8).unwrap().modes();
     let dampers = Dampers::spatial(&building, &COEFFICIENTS, EXPONENT).unwrap();
-    let forces = storm.scaled(2.0).on_plan([1.0, 0.0], &building).project(modes.shapes.as_ref());
+    let forces = storm.scaled(2.0).on_plan([1.0, 0.0], &building.centres_of_mass).project(modes.shapes.as_ref());
     let run = integrate_reduced(&modes, DAMPING_RATIO, &dampers, &forces, TIME_STEP, &Silent).unwrap();
     let roof = |d: Dof| -> Vec<f64> {
         let row = dof(39, d);
@@ -82,8 +82,14 @@ fn the_building_driven_along_x_sways_as_the_plane_frame_through_the_full_model()
     let all = SpatialModes::all(&building).unwrap().modes();
     let system = FullSystem::from_matrices(&building.mass, &building.stiffness, &all, 1.0, 1.0, DAMPING_RATIO);
     let dampers = Dampers::spatial(&building, &COEFFICIENTS, EXPONENT).unwrap();
-    let run = integrate_full(&system, &dampers, &storm.scaled(2.0).on_plan([1.0, 0.0], &building), TIME_STEP, &Silent)
-        .unwrap();
+    let run = integrate_full(
+        &system,
+        &dampers,
+        &storm.scaled(2.0).on_plan([1.0, 0.0], &building.centres_of_mass),
+        TIME_STEP,
+        &Silent,
+    )
+    .unwrap();
     for floor in [19, 39] {
         let x = &run.displacements[dof(floor, Dof::X)];
         let difference = relative_difference(x, &plane_run.displacements[floor]);
@@ -108,7 +114,7 @@ fn an_eccentric_building_twists_under_drag_along_x() {
     let storm = plane_storm();
     let modes = SpatialModes::of(&building, 8).unwrap().modes();
     let dampers = Dampers::spatial(&building, &COEFFICIENTS, EXPONENT).unwrap();
-    let forces = storm.scaled(2.0).on_plan([1.0, 0.0], &building);
+    let forces = storm.scaled(2.0).on_plan([1.0, 0.0], &building.centres_of_mass);
     // The drag acts at the plan's centre, 2.44 m below the centre of mass in y: its moment about
     // the centre of mass is 2.44 m times the force, on every floor.
     for (j, mean) in storm.mean.iter().enumerate() {

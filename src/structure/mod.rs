@@ -92,15 +92,7 @@ impl Structure {
     /// Height of the storey below each floor (m): the floor's share of the façade in the paper's
     /// quasi-steady model (A_j = h_j W).
     pub fn storey_heights(&self) -> Vec<f64> {
-        let mut below = 0.0;
-        self.floor_elevations
-            .iter()
-            .map(|&z| {
-                let h = z - below;
-                below = z;
-                h
-            })
-            .collect()
+        storey_heights(&self.floor_elevations)
     }
 
     /// Number of damper coefficient groups (one uncertain coefficient each).
@@ -190,4 +182,17 @@ fn check_dampers(dampers: &[DamperPlacement], floors: usize) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The storey each floor carries, from the floor below it (the ground for the first): z_j − z_{j−1}.
+pub fn storey_heights(elevations: &[f64]) -> Vec<f64> {
+    let mut below = 0.0;
+    elevations
+        .iter()
+        .map(|&z| {
+            let h = z - below;
+            below = z;
+            h
+        })
+        .collect()
 }

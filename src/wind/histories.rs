@@ -4,7 +4,7 @@
 
 use super::StormGrid;
 use super::spectral::CoarseSeries;
-use crate::structure::spatial::SpatialStructure;
+use crate::structure::spatial::plan_arms;
 use faer::MatRef;
 
 /// Total wind force on every floor over a storm.
@@ -33,15 +33,13 @@ impl FloorForces {
     }
 
     /// The three-dimensional building's floor loads of these forces acting along the unit vector
-    /// `direction` (cos β, sin β) at each plan's centre: on every floor the two components
-    /// and their moment about the floor's centre of mass, as [`dof`](crate::structure::spatial::dof)
-    /// numbers them. The along-wind drag of a plane study so placed drives the building as the
-    /// plane frame (the check that the three-dimensional model reduces to it).
-    pub fn on_plan(&self, direction: [f64; 2], structure: &SpatialStructure) -> FloorForces {
-        let [cos, sin] = direction;
-        // The centre lies at −e from the centre of mass: moment (−e_x) F sin β − (−e_y) F cos β.
-        let arms: Vec<[f64; 3]> =
-            structure.centres_of_mass.iter().map(|e| [cos, sin, e[1] * cos - e[0] * sin]).collect();
+    /// `direction` (cos β, sin β) at each plan's centre, for floors whose centres of mass lie at
+    /// `centres_of_mass` from their plans' centres: on every floor the two components and their
+    /// moment about the floor's centre of mass, as [`dof`](crate::structure::spatial::dof) numbers
+    /// them. The along-wind drag of a plane study so placed drives the building as the plane frame
+    /// (the check that the three-dimensional model reduces to it).
+    pub fn on_plan(&self, direction: [f64; 2], centres_of_mass: &[[f64; 2]]) -> FloorForces {
+        let arms: Vec<[f64; 3]> = centres_of_mass.iter().map(|&e| plan_arms(direction, e)).collect();
         let place =
             |values: &[f64]| -> Vec<f64> { values.iter().zip(&arms).flat_map(|(f, arm)| arm.map(|a| a * f)).collect() };
         let series = self

@@ -6,7 +6,7 @@ use super::spectral::{CoarseSeries, SpectralGrid, simulate, simulate_coarse};
 use super::spectrum::FieldSpectrum;
 use super::{StormGrid, TransformWorkspace, WindSite};
 use crate::error::{Error, Result};
-use crate::structure::Structure;
+use crate::structure::{Structure, storey_heights};
 use crate::uncertainty::Rng;
 use faer::MatRef;
 
@@ -25,17 +25,22 @@ impl WindLoads {
     /// The wind model of `structure` at `site`; its lowest floor must lie above the site's
     /// roughness length.
     pub fn new(site: &WindSite, structure: &Structure) -> Result<Self> {
+        Self::on_floors(site, &structure.floor_elevations, &structure.floor_widths)
+    }
+
+    /// The wind model of floors at `elevations` (m, increasing from the ground) whose façades
+    /// facing the wind are `widths` wide (m), each carrying the storey below it.
+    pub fn on_floors(site: &WindSite, elevations: &[f64], widths: &[f64]) -> Result<Self> {
         site.check()?;
-        if structure.floor_elevations[0] <= site.site_roughness_m {
+        if elevations.first().is_none_or(|&z| z <= site.site_roughness_m) {
             return Err(Error::invalid(
                 "floor_elevations_m[0]",
                 "the lowest floor must lie above the site's roughness length for the log profile to hold",
             ));
         }
         let half_rho_c = 0.5 * site.air_density_kg_m3 * site.pressure_coefficient;
-        let exposure =
-            structure.storey_heights().iter().zip(&structure.floor_widths).map(|(h, w)| half_rho_c * h * w).collect();
-        Ok(WindLoads { site: site.clone(), heights: structure.floor_elevations.clone(), exposure })
+        let exposure = storey_heights(elevations).iter().zip(widths).map(|(h, w)| half_rho_c * h * w).collect();
+        Ok(WindLoads { site: site.clone(), heights: elevations.to_vec(), exposure })
     }
 
     /// The cross-spectral density of the floors' speed fluctuations at a station speed (m/s).

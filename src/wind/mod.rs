@@ -3,6 +3,8 @@
 //! floor forces and modal forces — either projected from the full floor field or simulated directly
 //! from the projected cross-spectral matrix Φᵀ S_f Φ (the fast path, equal in law).
 
+pub mod aerodynamic;
+mod directional;
 mod histories;
 mod loads;
 mod modal;
@@ -11,10 +13,11 @@ mod spectral;
 mod spectrum;
 mod transform;
 
+pub use directional::DirectionalWind;
 pub use histories::{CoarseModalForces, FloorForces, ForceSource, ModalForces};
 pub use loads::WindLoads;
 pub use modal::ModalWind;
 pub use site::{StormGrid, WindSite};
 pub use spectral::{CoarseSeries, CrossSpectralDensity, CubicSchedule, SpectralGrid, simulate, simulate_coarse};
-pub use spectrum::{FieldSpectrum, ProjectedSpectrum};
+pub use spectrum::{FieldSpectrum, Projected, ProjectedSpectrum};
 pub use transform::TransformWorkspace;

@@ -138,6 +138,43 @@ impl CrossSpectralDensity for ProjectedSpectrum<'_> {
     }
 }
 
+/// The cross-spectral density of A·x for any process x and a fixed n_out × dim(x) matrix A: the
+/// generalized forces of a load whose spectrum has no structure to exploit (the wake's, say).
+pub struct Projected<'a> {
+    /// The process x.
+    pub process: &'a dyn CrossSpectralDensity,
+    /// The matrix A, n_out × dim(x).
+    pub projection: Mat<f64>,
+}
+
+impl CrossSpectralDensity for Projected<'_> {
+    fn dim(&self) -> usize {
+        self.projection.nrows()
+    }
+
+    fn sweep(&self, omega0: f64, domega: f64, count: usize, visit: &mut dyn FnMut(usize, &[f64])) {
+        let (p, n) = (self.dim(), self.process.dim());
+        let mut product = vec![0.0; p * n];
+        let mut s_out = vec![0.0; p * p];
+        self.process.sweep(omega0, domega, count, &mut |l, s| {
+            // A S, then (A S) Aᵀ.
+            for a in 0..p {
+                for k in 0..n {
+                    product[a * n + k] = (0..n).map(|j| self.projection[(a, j)] * s[j * n + k]).sum();
+                }
+            }
+            for a in 0..p {
+                for b in 0..=a {
+                    let v: f64 = (0..n).map(|k| product[a * n + k] * self.projection[(b, k)]).sum();
+                    s_out[a * p + b] = v;
+                    s_out[b * p + a] = v;
+                }
+            }
+            visit(l, &s_out);
+        });
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

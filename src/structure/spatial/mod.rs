@@ -10,10 +10,12 @@
 //! centre of mass moves by (u_x − θ p_y, u_y + θ p_x).
 
 mod assembly;
+mod corner;
 mod frame40;
 mod modes;
 
 pub use assembly::{PlanarSystem, StoreyProperties, assemble, from_storeys};
+pub use corner::{CornerAcceleration, corner_acceleration};
 pub use frame40::{FRAME40_3D_PLAN, frame40_3d};
 pub use modes::SpatialModes;
 
@@ -246,3 +248,10 @@ fn per_floor(field: &str, entries: usize, floors: usize) -> Result<()> {
 
 #[cfg(test)]
 mod tests;
+
+/// The loads on a floor's (x, y, θ about its centre of mass) of a unit force along `direction` at
+/// the plan's centre, which lies at −e from a centre of mass at e: the moment (−e) × F.
+pub fn plan_arms(direction: [f64; 2], centre_of_mass: [f64; 2]) -> [f64; 3] {
+    let [cos, sin] = direction;
+    [cos, sin, centre_of_mass[1] * cos - centre_of_mass[0] * sin]
+}
