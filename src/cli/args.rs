@@ -2,8 +2,9 @@
 
 use crate::analysis::{CertifyOptions, Response, ResponseKind};
 use crate::error::{Error, Result};
-use crate::study::{Order, Study, StudySpec, WIND_SPEED};
+use crate::study::{Order, SPATIAL_PRESETS, SpatialStudy, Study, StudySpec, WIND_SPEED};
 use crate::uncertainty::{InputModel, parse_assignment};
+use crate::wind::aerodynamic::Aerodynamics;
 use clap::Args;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -11,7 +12,8 @@ use std::path::PathBuf;
 /// The study a command runs on: a preset or a spec file, with command-line overrides.
 #[derive(Debug, Clone, Args)]
 pub struct StudyArgs {
-    /// Built-in study: frame40 (dampers as printed, N·s/m) or frame40-kn (the same numbers in kN·s/m).
+    /// Built-in study: frame40 (dampers as printed, N·s/m), frame40-kn (the same numbers in kN·s/m),
+    /// or the three-dimensional frame40-3d (`modes` and `simulate` only).
     #[arg(long, default_value = "frame40-kn", conflicts_with = "spec")]
     pub preset: String,
     /// A study file (JSON): preset or custom structure, input marginals, wind, modes, duration.
@@ -34,6 +36,32 @@ pub struct StudyArgs {
 impl StudyArgs {
     /// Reads the spec (file or preset), applies the command-line overrides and the fixed inputs.
     pub fn study(&self) -> Result<Study> {
+        let mut study = Study::from_spec(&self.spec()?)?;
+        for assignment in &self.fix {
+            let (name, value) = parse_assignment(assignment)?;
+            study.inputs = study.inputs.with_fixed(&name, value)?;
+        }
+        Ok(study)
+    }
+
+    /// The three-dimensional study of the preset, with its centre of mass at `eccentricity` and the
+    /// wake loads of `aerodynamics`, the command line's overrides and fixed inputs applied.
+    pub fn spatial_study(&self, eccentricity: [f64; 2], aerodynamics: Aerodynamics) -> Result<SpatialStudy> {
+        let mut study = SpatialStudy::preset(&self.spec()?, eccentricity, aerodynamics)?;
+        for assignment in &self.fix {
+            let (name, value) = parse_assignment(assignment)?;
+            study.inputs = study.inputs.with_fixed(&name, value)?;
+        }
+        Ok(study)
+    }
+
+    /// Whether the study is a three-dimensional preset.
+    pub fn is_spatial(&self) -> bool {
+        self.spec.is_none() && SPATIAL_PRESETS.contains(&self.preset.as_str())
+    }
+
+    /// The spec (file or preset) with the command line's storm and modes.
+    fn spec(&self) -> Result<StudySpec> {
         let mut spec = match &self.spec {
             Some(path) => {
                 let text = std::fs::read_to_string(path)
@@ -52,12 +80,7 @@ impl StudyArgs {
         if self.modes.is_some() {
             spec.modes = self.modes;
         }
-        let mut study = Study::from_spec(&spec)?;
-        for assignment in &self.fix {
-            let (name, value) = parse_assignment(assignment)?;
-            study.inputs = study.inputs.with_fixed(&name, value)?;
-        }
-        Ok(study)
+        Ok(spec)
     }
 }
 
@@ -199,4 +222,14 @@ pub fn answer<T: serde::Serialize>(
         write_out(path, &text)?;
     }
     Ok(if json { as_json() } else { table() })
+}
+
+/// `--eccentricity X,Y` of a three-dimensional preset: the centre of mass at the plan's centre when
+/// absent.
+pub fn eccentricity(given: Option<&[f64]>) -> Result<[f64; 2]> {
+    match given {
+        None => Ok([0.0, 0.0]),
+        Some([x, y]) => Ok([*x, *y]),
+        Some(_) => Err(Error::invalid("eccentricity", "give two numbers, X,Y in metres")),
+    }
 }

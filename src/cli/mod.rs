@@ -14,6 +14,7 @@ mod profile;
 mod sensitivity;
 mod serviceability;
 mod simulate;
+mod simulate_spatial;
 mod sweep;
 mod validate;
 

@@ -4,7 +4,6 @@
 use super::StudyArgs;
 use crate::error::{Error, Result};
 use crate::structure::spatial::{Dof, SpatialModes, frame40_3d};
-use crate::study::SPATIAL_PRESETS;
 use clap::Args;
 use serde_json::json;
 use std::f64::consts::PI;
@@ -25,7 +24,7 @@ pub struct ModesArgs {
 
 /// Runs `windmeta modes`: a table of the modes, or JSON with `--json`.
 pub fn modes(args: &ModesArgs) -> Result<String> {
-    if args.study.spec.is_none() && SPATIAL_PRESETS.contains(&args.study.preset.as_str()) {
+    if args.study.is_spatial() {
         return spatial_modes(args);
     }
     if args.eccentricity.is_some() {
@@ -73,11 +72,7 @@ pub fn modes(args: &ModesArgs) -> Result<String> {
 /// The modes of the three-dimensional preset (three retained unless `--modes` says otherwise, up to
 /// the building's 120 degrees of freedom).
 fn spatial_modes(args: &ModesArgs) -> Result<String> {
-    let eccentricity = match args.eccentricity.as_deref() {
-        None => [0.0, 0.0],
-        Some([x, y]) => [*x, *y],
-        Some(_) => return Err(Error::invalid("eccentricity", "give two numbers, X,Y in metres")),
-    };
+    let eccentricity = super::args::eccentricity(args.eccentricity.as_deref())?;
     let building = frame40_3d(eccentricity)?;
     let modes = SpatialModes::of(&building, args.study.modes.unwrap_or(6))?;
     let name = &args.study.preset;

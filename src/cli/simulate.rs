@@ -48,10 +48,24 @@ pub struct SimulateArgs {
     /// Print the inputs, every floor's peaks and the timings as JSON.
     #[arg(long)]
     pub json: bool,
+    /// Three-dimensional preset only: the centre of mass's offset from the plan's centre, `X,Y` (m).
+    #[arg(long, value_name = "X,Y", value_delimiter = ',', allow_negative_numbers = true)]
+    pub eccentricity: Option<Vec<f64>>,
+    /// Three-dimensional preset only: across-wind and torsional loads from this wind-tunnel data
+    /// file (docs/wind-tunnel-data.md) instead of the published model.
+    #[arg(long, value_name = "FILE")]
+    pub wind_tunnel: Option<PathBuf>,
 }
 
 /// Runs `windmeta simulate`: one storm at the inputs' means (or fixed values) and its peaks.
 pub fn simulate(args: &SimulateArgs) -> Result<String> {
+    if args.study.is_spatial() {
+        return super::simulate_spatial::simulate_spatial(args);
+    }
+    if args.eccentricity.is_some() || args.wind_tunnel.is_some() {
+        let field = if args.eccentricity.is_some() { "eccentricity" } else { "wind-tunnel" };
+        return Err(Error::invalid(field, "applies to the three-dimensional preset frame40-3d only"));
+    }
     let started = Instant::now();
     let study = args.study.study()?;
     let setup_seconds = started.elapsed().as_secs_f64();

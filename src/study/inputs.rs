@@ -20,21 +20,39 @@ pub struct PhysicalParameters {
     pub wind_speed: f64,
 }
 
+/// A sample's physical parameters: `x` holds a value of every input of `inputs`, by its order.
+pub(super) fn physical_parameters(inputs: &InputModel, damper_groups: usize, x: &[f64]) -> Result<PhysicalParameters> {
+    inputs.check_sample(x)?;
+    let value = |name: &str| -> Result<f64> { Ok(x[inputs.index_of(name)?]) };
+    let damper_coefficients =
+        (1..=damper_groups).map(|g| value(&format!("damper_c{g}"))).collect::<Result<Vec<_>>>()?;
+    Ok(PhysicalParameters {
+        youngs_modulus: value("youngs_modulus")?,
+        mass_factor: value("mass_factor")?,
+        damping_ratio: value("damping_ratio")?,
+        damper_coefficients,
+        wind_speed: value(WIND_SPEED)?,
+    })
+}
+
 /// The paper's input model (section 4.3) for `structure`; damper coefficients uniform on
 /// [0, 100·damper_scale].
 pub(super) fn default_inputs(structure: &Structure, damper_scale: f64) -> InputModel {
+    frame_inputs(structure.reference_youngs_modulus, structure.damper_groups(), damper_scale)
+}
+
+/// The paper's input model for a building of reference modulus `youngs_modulus` (Pa) with
+/// `damper_groups` coefficient groups.
+pub(super) fn frame_inputs(youngs_modulus: f64, damper_groups: usize, damper_scale: f64) -> InputModel {
     let mut inputs = vec![
         Input {
             name: "youngs_modulus".into(),
-            marginal: Marginal::Lognormal {
-                mean: structure.reference_youngs_modulus,
-                sd: structure.reference_youngs_modulus * 15.0 / 210.0,
-            },
+            marginal: Marginal::Lognormal { mean: youngs_modulus, sd: youngs_modulus * 15.0 / 210.0 },
         },
         Input { name: "mass_factor".into(), marginal: Marginal::Lognormal { mean: 1.0, sd: 0.05 } },
         Input { name: "damping_ratio".into(), marginal: Marginal::Lognormal { mean: 0.015, sd: 0.005 } },
     ];
-    for g in 0..structure.damper_groups() {
+    for g in 0..damper_groups {
         inputs.push(Input {
             name: format!("damper_c{}", g + 1),
             marginal: Marginal::Uniform { lower: 0.0, upper: 100.0 * damper_scale },

@@ -4,15 +4,18 @@
 //!
 //! The input names are the same on the command line, in files and over HTTP: `youngs_modulus` (Pa),
 //! `mass_factor`, `damping_ratio` (shared by all modes), `damper_c1` … `damper_cG` (N·(s/m)^α, one
-//! per damper group from the ground up) and `wind_speed` (m/s at the station, 10 m).
+//! per damper group from the ground up) and `wind_speed` (m/s at the station, 10 m); a
+//! three-dimensional study (`spatial`) adds `wind_direction` (degrees).
 
 mod inputs;
 mod presets;
+mod spatial;
 mod spec;
 mod storms;
 
 pub use inputs::{PhysicalParameters, WIND_SPEED};
 pub use presets::{DEFAULT_PRESET, PRESETS, SPATIAL_PRESETS};
+pub use spatial::{FloorPeaks, SPATIAL_MODES, SpatialRun, SpatialStudy, WIND_DIRECTION};
 pub use spec::StudySpec;
 pub use storms::{Order, StormRun, WindPath};
 
@@ -21,7 +24,7 @@ use crate::error::{Error, Result};
 use crate::structure::{Modes, Structure};
 use crate::uncertainty::InputModel;
 use crate::wind::{ModalWind, StormGrid, WindLoads};
-use inputs::{check_admissible, default_inputs};
+use inputs::{check_admissible, default_inputs, physical_parameters};
 
 /// A validated study.
 #[derive(Debug, Clone)]
@@ -128,17 +131,7 @@ impl Study {
 
     /// Reads a sample (values in the input model's order) as physical parameters.
     pub fn parameters(&self, x: &[f64]) -> Result<PhysicalParameters> {
-        self.inputs.check_sample(x)?;
-        let value = |name: &str| -> Result<f64> { Ok(x[self.inputs.index_of(name)?]) };
-        let damper_coefficients =
-            (1..=self.structure.damper_groups()).map(|g| value(&format!("damper_c{g}"))).collect::<Result<Vec<_>>>()?;
-        Ok(PhysicalParameters {
-            youngs_modulus: value("youngs_modulus")?,
-            mass_factor: value("mass_factor")?,
-            damping_ratio: value("damping_ratio")?,
-            damper_coefficients,
-            wind_speed: value("wind_speed")?,
-        })
+        physical_parameters(&self.inputs, self.structure.damper_groups(), x)
     }
 
     /// Stiffness factor κ = E / E_ref of a sample.

@@ -7,8 +7,9 @@ use crate::structure::{Structure, frame40};
 /// The built-in studies: the paper's frame with damper coefficients as printed (N·s/m) and the same
 /// numbers in kN·s/m, where the dampers really act.
 pub const PRESETS: [&str; 2] = ["frame40", "frame40-kn"];
-/// The built-in three-dimensional buildings: `windmeta modes` shows their modes; studies of them
-/// (wind from a direction, across-wind and torsional loads) are not available yet.
+/// The built-in three-dimensional buildings: `windmeta modes` shows their modes and `windmeta
+/// simulate` runs a storm through them ([`super::SpatialStudy`]); the other study commands do not
+/// take them yet.
 pub const SPATIAL_PRESETS: [&str; 1] = ["frame40-3d"];
 /// The study a calibration request without a preset or a structure calibrates.
 pub const DEFAULT_PRESET: &str = "frame40-kn";
@@ -23,8 +24,8 @@ pub(super) fn resolve(spec: &StudySpec) -> Result<(String, Structure, f64)> {
             return Err(Error::invalid(
                 "preset",
                 format!(
-                    "`{spatial}` is a three-dimensional building: `windmeta modes --preset {spatial}` shows its modes, \
-                     but studies of three-dimensional buildings are not available yet; the presets are {}",
+                    "`{spatial}` is a three-dimensional building: `windmeta modes` and `windmeta simulate` take it, \
+                     this command does not yet (it takes {})",
                     PRESETS.join(", ")
                 ),
             ));

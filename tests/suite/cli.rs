@@ -60,7 +60,61 @@ fn modes_of_the_three_dimensional_preset_show_their_shares() {
     assert!(twist > 1e-3 && twist < 0.1, "the first mode's twist share {twist}");
     refused(&["modes", "--preset", "frame40-3d", "--eccentricity", "0,9"], "eccentricity_m");
     refused(&["modes", "--preset", "frame40", "--eccentricity", "0,1"], "eccentricity");
-    refused(&["simulate", "--preset", "frame40-3d"], "three-dimensional");
+    refused(&["sample-peaks", "--preset", "frame40-3d"], "three-dimensional");
+}
+
+/// One storm from a direction on the three-dimensional preset: the square building turned by 90°
+/// is itself, so wind towards y sways it along y as wind towards x sways it along x (the same
+/// random phases); the corner's resultant acceleration is at least either sway's.
+#[test]
+fn simulate_runs_the_three_dimensional_preset_from_a_direction() {
+    let run = |direction: &str, extra: &[&str]| {
+        let fix = format!("wind_direction={direction}");
+        let mut args = vec![
+            "simulate",
+            "--preset",
+            "frame40-3d",
+            "--duration",
+            "60",
+            "--fix",
+            "wind_speed=35",
+            "--fix",
+            &fix,
+            "--json",
+        ];
+        // Seven modes: x1, y1, θ1, x2, y2 and the pair x3, y3, a basis the 90° turn maps onto itself.
+        args.extend_from_slice(&["--modes", "7"]);
+        args.extend_from_slice(extra);
+        json(&args)
+    };
+    let column = |v: &Value, name: &str| -> Vec<f64> {
+        v["peaks"][name].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    };
+    let along_x = run("0", &[]);
+    let along_y = run("90", &[]);
+    let (x0, y0) = (column(&along_x, "displacement_x_m"), column(&along_x, "displacement_y_m"));
+    let (x90, y90) = (column(&along_y, "displacement_x_m"), column(&along_y, "displacement_y_m"));
+    assert_eq!(x0.len(), 40);
+    for j in [19, 39] {
+        assert!((y90[j] / x0[j] - 1.0).abs() < 1e-6, "floor {}: {} against {}", j + 1, y90[j], x0[j]);
+        assert!((x90[j] / y0[j] - 1.0).abs() < 1e-6, "floor {}: {} against {}", j + 1, x90[j], y0[j]);
+    }
+    // The published model's across-wind load sways it across the wind too.
+    assert!(y0[39] > 0.01 * x0[39], "across-wind sway {} against {}", y0[39], x0[39]);
+    let corner = column(&along_x, "corner_acceleration_m_s2");
+    let (ax, ay) = (column(&along_x, "acceleration_x_m_s2"), column(&along_x, "acceleration_y_m_s2"));
+    assert!(corner[39] >= ax[39].max(ay[39]) * (1.0 - 1e-12), "{} against {} and {}", corner[39], ax[39], ay[39]);
+    assert!(column(&along_x, "rms_corner_acceleration_m_s2")[39] < corner[39]);
+    let tunnel = concat!(env!("CARGO_MANIFEST_DIR"), "/docs/data/wind-tunnel-example.json");
+    let measured = run("30", &["--wind-tunnel", tunnel]);
+    assert_eq!(measured["wake_loads"], "wind_tunnel");
+    assert!(column(&measured, "rotation_rad")[39] > 0.0);
+    refused(
+        &["simulate", "--preset", "frame40-3d", "--duration", "60", "--wind-tunnel", "/nonexistent.json"],
+        "wind-tunnel",
+    );
+    refused(&["simulate", "--preset", "frame40-kn", "--eccentricity", "1,0"], "eccentricity");
+    refused(&["simulate", "--preset", "frame40-3d", "--fix", "wind_direction=NaN"], "wind_direction");
 }
 
 #[test]
