@@ -10,6 +10,9 @@ use crate::wind::aerodynamic::{Aerodynamics, TunnelData};
 use serde_json::json;
 use std::time::Instant;
 
+/// One column of the floors' peaks.
+type Column<'a> = &'a dyn Fn(&FloorPeaks) -> f64;
+
 /// Runs `windmeta simulate` on a three-dimensional preset: one storm at the inputs' means (the
 /// direction's mean is 180° unless fixed) and its peaks.
 pub fn simulate_spatial(args: &SimulateArgs) -> Result<String> {
@@ -85,7 +88,7 @@ pub fn simulate_spatial(args: &SimulateArgs) -> Result<String> {
         peaks.iter().enumerate().fold((0, 0.0), |best, (j, p)| if f(p) > best.1 { (j + 1, f(p)) } else { best })
     };
     out += "largest peaks up the height (every floor's in --json):\n";
-    let rows: [(&str, &dyn Fn(&FloorPeaks) -> f64, &str, bool); 10] = [
+    let rows: [(&str, Column, &str, bool); 10] = [
         ("displacement along x", &|p| p.displacement[0], "m", false),
         ("displacement along y", &|p| p.displacement[1], "m", false),
         ("rotation", &|p| p.displacement[2], "rad", false),

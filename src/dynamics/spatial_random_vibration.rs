@@ -44,12 +44,15 @@ const DURATION: f64 = 900.0;
 const TRANSIENT: f64 = 100.0;
 const STORMS: u64 = 160;
 
+/// Columns by (column, ω₀, Δω, buffer length).
+type KeptColumns = HashMap<(usize, u64, u64, usize), Vec<f64>>;
+
 /// A spectrum's Cholesky columns kept from the first storm for the next: every storm of the test
 /// simulates the same spectrum on the same frequencies, and forming the wake's projected spectrum
 /// (80 floor loads onto 6 modes) at each of them is most of a storm's cost otherwise.
 struct Kept<'a> {
     spectrum: &'a dyn CrossSpectralDensity,
-    columns: RefCell<HashMap<(usize, u64, u64, usize), Vec<f64>>>,
+    columns: RefCell<KeptColumns>,
 }
 
 impl CrossSpectralDensity for Kept<'_> {
@@ -112,11 +115,11 @@ fn solve_complex(a_matrix: &Mat<f64>, b_matrix: &Mat<f64>, rhs: &[f64]) -> (Vec<
     for k in 0..n {
         let pivot = (k..n).max_by(|&x, &y| m[x][k].abs().total_cmp(&m[y][k].abs())).unwrap();
         m.swap(k, pivot);
-        for i in k + 1..n {
-            let factor = m[i][k] / m[k][k];
-            for j in k..=n {
-                m[i][j] -= factor * m[k][j];
-            }
+        let (above, below) = m.split_at_mut(k + 1);
+        let pivot_row = &above[k];
+        for row in below {
+            let factor = row[k] / pivot_row[k];
+            row[k..].iter_mut().zip(&pivot_row[k..]).for_each(|(x, p)| *x -= factor * p);
         }
     }
     let mut x = vec![0.0; n];

@@ -31,7 +31,7 @@ pub const PUBLISHED_SIDE_RATIOS: (f64, f64) = (0.2, 5.0);
 /// The vertical coherence decay k of γ(Δz) = exp(−k |Δz|/B) when none is given: the wake's forces
 /// on a prism in turbulent flow stay correlated over about two breadths up the height. Not from a
 /// source that could be read here; it does not change the base loads' spectra, only how the load
-/// is shared among the modes (see [`field`]).
+/// is shared among the modes (see [`WakeField`]).
 pub const DEFAULT_VERTICAL_COHERENCE_DECAY: f64 = 0.5;
 
 /// The across-wind and torsional base loads at one wind direction.

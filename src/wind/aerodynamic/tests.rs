@@ -290,13 +290,13 @@ fn simulated_wake_loads_have_the_target_spectra_and_cross_spectrum() {
             })
             .collect();
         for (b, &(low, high)) in bands.iter().enumerate() {
-            for k in 1..samples / 2 {
+            let lines = spectra[0].iter().zip(&spectra[1]).enumerate().take(samples / 2).skip(1);
+            for (k, (&y, &t)) in lines {
                 let f = k as f64 / (samples as f64 * dt);
                 if f < low || f >= high {
                     continue;
                 }
                 let scale = 2.0 / (samples as f64).powi(2);
-                let (y, t) = (spectra[0][k], spectra[1][k]);
                 estimates[b][0] += scale * y.norm_sqr();
                 estimates[b][1] += scale * t.norm_sqr();
                 estimates[b][2] += scale * (y * t.conj()).re;
