@@ -66,7 +66,15 @@ pub(super) fn frame_inputs(youngs_modulus: f64, damper_groups: usize, damper_sca
 /// that annual analyses replace by a climate, and whose germ the metamodel treats apart.
 pub const WIND_SPEED: &str = "wind_speed";
 
-/// Every physical input is non-negative; these must also stay away from zero.
+/// The wind's direction (degrees): where it blows towards, counter-clockwise from the plan's x
+/// axis; an input of a three-dimensional study like the speed, uniform around the circle unless
+/// the spec says otherwise.
+pub const WIND_DIRECTION: &str = "wind_direction";
+
+/// Inputs that are angles (degrees), any real value.
+const ANGULAR_INPUTS: [&str; 1] = [WIND_DIRECTION];
+
+/// Every other physical input is non-negative; these must also stay away from zero.
 const POSITIVE_INPUTS: [&str; 3] = ["youngs_modulus", "mass_factor", WIND_SPEED];
 
 /// Probability below which a marginal's mass under zero is no objection: a Gumbel law of annual
@@ -77,6 +85,10 @@ const NEGLIGIBLE_PROBABILITY: f64 = 1e-12;
 /// Refuses a marginal that reaches values the input cannot take with more than a negligible
 /// probability.
 pub(super) fn check_admissible(input: &Input) -> Result<()> {
+    // A direction is an angle: any value is one, −30° being 330°.
+    if ANGULAR_INPUTS.contains(&input.name.as_str()) {
+        return Ok(());
+    }
     let (lower, _) = input.marginal.support();
     let positive = POSITIVE_INPUTS.contains(&input.name.as_str());
     let below_zero = lower < 0.0 && input.marginal.cdf(0.0) > NEGLIGIBLE_PROBABILITY;

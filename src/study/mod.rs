@@ -13,9 +13,9 @@ mod spatial;
 mod spec;
 mod storms;
 
-pub use inputs::{PhysicalParameters, WIND_SPEED};
+pub use inputs::{PhysicalParameters, WIND_DIRECTION, WIND_SPEED};
 pub use presets::{DEFAULT_PRESET, PRESETS, SPATIAL_PRESETS};
-pub use spatial::{FloorPeaks, SPATIAL_MODES, SpatialRun, SpatialStudy, WIND_DIRECTION};
+pub use spatial::{FloorPeaks, SPATIAL_MODES, SpatialRun, SpatialStudy};
 pub use spec::StudySpec;
 pub use storms::{Order, StormRun, WindPath};
 

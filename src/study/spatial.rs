@@ -3,7 +3,7 @@
 //! force and torque), and one storm through its reference models, with its responses per direction
 //! and at the corners of every floor.
 
-use super::inputs::{PhysicalParameters, frame_inputs, physical_parameters};
+use super::inputs::{PhysicalParameters, WIND_DIRECTION, frame_inputs, physical_parameters};
 use super::{Order, StudySpec, check_admissible};
 use crate::dynamics::{Dampers, FullSystem, ModalMotion, SampleModel, integrate_full, integrate_reduced};
 use crate::error::{Error, Result};
@@ -15,10 +15,6 @@ use crate::structure::spatial::{
 use crate::uncertainty::{Input, InputModel, Marginal, Rng};
 use crate::wind::aerodynamic::Aerodynamics;
 use crate::wind::{DirectionalWind, StormGrid, WindLoads};
-
-/// The wind's direction (degrees): where it blows towards, counter-clockwise from the plan's x
-/// axis. An input like the speed, uniform around the circle unless the spec says otherwise.
-pub const WIND_DIRECTION: &str = "wind_direction";
 
 /// Modes a three-dimensional study retains unless told: for `frame40-3d`, the plane frame's three
 /// in x and in y and the two twists below its third (√3 times its first two), everything up to
@@ -213,5 +209,61 @@ impl SpatialRun {
                 FloorPeaks { displacement, drift, acceleration, corner }
             })
             .collect()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(inputs: &[(&str, Marginal)]) -> StudySpec {
+        let mut spec = StudySpec { preset: Some("frame40-3d".into()), ..Default::default() };
+        for (name, marginal) in inputs {
+            spec.inputs.insert(name.to_string(), *marginal);
+        }
+        spec
+    }
+
+    #[test]
+    fn the_direction_is_an_input_that_may_take_any_angle() {
+        let study = SpatialStudy::preset(&spec(&[]), [0.0, 0.0], Aerodynamics::Published).unwrap();
+        let names: Vec<&str> = study.inputs.names().collect();
+        assert_eq!(names.last(), Some(&WIND_DIRECTION));
+        assert_eq!(study.modes.count(), SPATIAL_MODES);
+        let westerly = spec(&[(WIND_DIRECTION, Marginal::Normal { mean: -20.0, sd: 30.0 })]);
+        assert!(SpatialStudy::preset(&westerly, [0.0, 0.0], Aerodynamics::Published).is_ok());
+        let slow = spec(&[("wind_speed", Marginal::Normal { mean: 30.0, sd: 10.0 })]);
+        let refused = SpatialStudy::preset(&slow, [0.0, 0.0], Aerodynamics::Published).unwrap_err().to_string();
+        assert!(refused.contains("inputs.wind_speed"), "{refused}");
+        let plane = StudySpec { preset: Some("frame40-kn".into()), ..Default::default() };
+        let refused = SpatialStudy::preset(&plane, [0.0, 0.0], Aerodynamics::Published).unwrap_err().to_string();
+        assert!(refused.contains("preset"), "{refused}");
+    }
+
+    /// Drifts are relative motions over the storey's height, and on a plan whose centre of mass is
+    /// its centre the corners see at least the centre's sway (their mean square over the four is
+    /// the centre's plus the twist's): one short storm's peaks, floor by floor.
+    #[test]
+    fn a_storms_floor_peaks_hold_together() {
+        let mut spec = spec(&[]);
+        spec.duration_s = Some(60.0);
+        spec.modes = Some(5);
+        let mut study = SpatialStudy::preset(&spec, [0.0, 0.0], Aerodynamics::Published).unwrap();
+        study.inputs = study.inputs.with_fixed(WIND_DIRECTION, 30.0).unwrap();
+        let x = study.inputs.means();
+        let run = study.reference_run(&x, Order::Reduced, &mut crate::uncertainty::rng_from_seed(3)).unwrap();
+        assert_eq!(run.direction, 30.0);
+        let peaks = run.floor_peaks(&study.structure);
+        assert_eq!(peaks.len(), 40);
+        let first = &peaks[0];
+        let storey = study.structure.floor_elevations[0];
+        assert!((first.drift[0] - first.displacement[0] / storey).abs() < 1e-15);
+        for p in &peaks {
+            let centre = p.acceleration[0].max(p.acceleration[1]);
+            assert!(p.corner.peak >= centre * (1.0 - 1e-12), "{p:?}");
+            assert!(p.corner.rms <= p.corner.peak && p.corner.rms > 0.0, "{p:?}");
+        }
+        // The wake's torque twists it.
+        assert!(peaks[39].displacement[2] > 0.0);
     }
 }
