@@ -39,6 +39,8 @@ pub struct SpatialStudy {
     pub damper_exponent: f64,
     /// Duration and time step of every storm.
     pub storm: StormGrid,
+    /// Every mode, for the full-order model's classical damping (solved once, not per storm).
+    all_modes: Modes,
 }
 
 impl SpatialStudy {
@@ -82,7 +84,8 @@ impl SpatialStudy {
         let storm = StormGrid::new(spec.duration_s.unwrap_or(900.0), spec.time_step_s.unwrap_or(0.01), &site)?;
         let damper_exponent = spec.damper_exponent.unwrap_or(0.38);
         Dampers::spatial(&structure, &vec![0.0; structure.damper_groups()], damper_exponent)?;
-        Ok(SpatialStudy { name: name.into(), structure, modes, inputs, wind, damper_exponent, storm })
+        let all_modes = SpatialModes::all(&structure)?.modes();
+        Ok(SpatialStudy { name: name.into(), structure, modes, inputs, wind, damper_exponent, storm, all_modes })
     }
 
     /// A sample's physical parameters and its wind direction (degrees).
@@ -115,11 +118,10 @@ impl SpatialStudy {
                 })
             }
             Order::Full => {
-                let all = SpatialModes::all(&self.structure)?.modes();
                 let system = FullSystem::from_matrices(
                     &self.structure.mass,
                     &self.structure.stiffness,
-                    &all,
+                    &self.all_modes,
                     stiffness,
                     p.mass_factor,
                     p.damping_ratio,
