@@ -52,6 +52,7 @@ pub use design::sweep::{MAX_SWEEP_VALUES, Sweep, SweepOptions, SweepPoint, metam
 pub use responses::peaks::{PeakSummary, pearson, quantile};
 pub use responses::reference::{reference_history, reference_peak};
 pub use responses::response::{Response, ResponseKind, ResponseName, ResponseView, STANDARD_GRAVITY};
+pub use responses::spatial::{SpatialKind, SpatialResponse};
 pub use sampling::climate::{
     ClimateCoverage, ClimateSpec, annual_probability_of_period, climate_or_own, period_of_annual_probability,
 };

@@ -1,10 +1,11 @@
 //! Arguments shared by the commands: the study, the response, the output file.
 
-use crate::analysis::{CertifyOptions, Response, ResponseKind};
+use crate::analysis::{CertifyOptions, Response, ResponseKind, SpatialKind, SpatialResponse};
 use crate::error::{Error, Result};
+use crate::structure::spatial::Dof;
 use crate::study::{Order, SPATIAL_PRESETS, SpatialStudy, Study, StudySpec, WIND_SPEED};
 use crate::uncertainty::{InputModel, parse_assignment};
-use crate::wind::aerodynamic::Aerodynamics;
+use crate::wind::aerodynamic::{Aerodynamics, TunnelData};
 use clap::Args;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -13,7 +14,7 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, Args)]
 pub struct StudyArgs {
     /// Built-in study: frame40 (dampers as printed, N·s/m), frame40-kn (the same numbers in kN·s/m),
-    /// or the three-dimensional frame40-3d (`modes` and `simulate` only).
+    /// or the three-dimensional frame40-3d (`modes`, `simulate` and `sample-peaks` only).
     #[arg(long, default_value = "frame40-kn", conflicts_with = "spec")]
     pub preset: String,
     /// A study file (JSON): preset or custom structure, input marginals, wind, modes, duration.
@@ -31,11 +32,18 @@ pub struct StudyArgs {
     /// Retained modes.
     #[arg(long)]
     pub modes: Option<usize>,
+    /// Three-dimensional studies: across-wind and torsional loads from this wind-tunnel data file
+    /// (docs/wind-tunnel-data.md) instead of the published model.
+    #[arg(long, value_name = "FILE")]
+    pub wind_tunnel: Option<PathBuf>,
 }
 
 impl StudyArgs {
     /// Reads the spec (file or preset), applies the command-line overrides and the fixed inputs.
     pub fn study(&self) -> Result<Study> {
+        if self.wind_tunnel.is_some() {
+            return Err(Error::invalid("wind-tunnel", "applies to a three-dimensional study (frame40-3d) only"));
+        }
         let mut study = Study::from_spec(&self.spec()?)?;
         for assignment in &self.fix {
             let (name, value) = parse_assignment(assignment)?;
@@ -44,10 +52,10 @@ impl StudyArgs {
         Ok(study)
     }
 
-    /// The three-dimensional study of the preset, with its centre of mass at `eccentricity` and the
-    /// wake loads of `aerodynamics`, the command line's overrides and fixed inputs applied.
-    pub fn spatial_study(&self, eccentricity: [f64; 2], aerodynamics: Aerodynamics) -> Result<SpatialStudy> {
-        let mut study = SpatialStudy::preset(&self.spec()?, eccentricity, aerodynamics)?;
+    /// The three-dimensional study of the preset, with the wake loads of the published model or of
+    /// `--wind-tunnel`, the command line's overrides and fixed inputs applied.
+    pub fn spatial_study(&self) -> Result<SpatialStudy> {
+        let mut study = SpatialStudy::from_spec(&self.spec()?, self.aerodynamics()?)?;
         for assignment in &self.fix {
             let (name, value) = parse_assignment(assignment)?;
             study.inputs = study.inputs.with_fixed(&name, value)?;
@@ -55,9 +63,29 @@ impl StudyArgs {
         Ok(study)
     }
 
-    /// Whether the study is a three-dimensional preset.
+    /// The wake loads: the published model, or the wind-tunnel file's (its refusals name the file).
+    pub fn aerodynamics(&self) -> Result<Aerodynamics> {
+        let Some(path) = &self.wind_tunnel else { return Ok(Aerodynamics::Published) };
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| Error::invalid("wind-tunnel", format!("cannot read {}: {e}", path.display())))?;
+        Ok(Aerodynamics::Tunnel(TunnelData::from_json(&text).map_err(|e| match e {
+            Error::Invalid { field, reason } => {
+                Error::invalid(format!("wind-tunnel {}: {field}", path.display()), reason)
+            }
+            other => other,
+        })?))
+    }
+
+    /// Whether the study is a three-dimensional building: a preset, or a spec file with a
+    /// `spatial_structure` or a three-dimensional preset (a spec that cannot be read is left to the
+    /// plane study's refusal).
     pub fn is_spatial(&self) -> bool {
-        self.spec.is_none() && SPATIAL_PRESETS.contains(&self.preset.as_str())
+        match &self.spec {
+            None => SPATIAL_PRESETS.contains(&self.preset.as_str()),
+            Some(_) => self.spec().is_ok_and(|spec| {
+                spec.spatial_structure.is_some() || spec.preset.as_deref().is_some_and(|p| SPATIAL_PRESETS.contains(&p))
+            }),
+        }
     }
 
     /// The spec (file or preset) with the command line's storm and modes.
@@ -140,12 +168,35 @@ pub struct ResponseArgs {
     /// The inter-storey drift below the floor (the same as --response drift).
     #[arg(long)]
     pub drift: bool,
+    /// Three-dimensional studies: the direction of a response at the centre of mass, x, y or
+    /// rotation (corner_acceleration and rms_corner_acceleration take none).
+    #[arg(long, value_parser = ["x", "y", "rotation"])]
+    pub direction: Option<String>,
 }
 
 impl ResponseArgs {
+    /// The response of a plane study.
     pub fn response(&self, study: &Study) -> Result<Response> {
+        if self.direction.is_some() {
+            return Err(Error::invalid("direction", "a plane frame moves along the wind only; it takes no direction"));
+        }
         let kind = if self.drift { ResponseKind::Drift } else { ResponseKind::parse(&self.response)? };
         kind.located(self.floor, self.group, &study.structure)
+    }
+
+    /// The response of a three-dimensional study.
+    pub fn spatial_response(&self, study: &SpatialStudy) -> Result<SpatialResponse> {
+        if self.group.is_some() {
+            return Err(Error::invalid("group", "damper responses of a three-dimensional building are not read yet"));
+        }
+        let kind = if self.drift { SpatialKind::Drift } else { SpatialKind::parse(&self.response)? };
+        let direction = match self.direction.as_deref() {
+            None => None,
+            Some("x") => Some(Dof::X),
+            Some("y") => Some(Dof::Y),
+            Some(_) => Some(Dof::Rotation),
+        };
+        SpatialResponse::located(kind, self.floor, direction, &study.structure)
     }
 }
 
@@ -222,14 +273,4 @@ pub fn answer<T: serde::Serialize>(
         write_out(path, &text)?;
     }
     Ok(if json { as_json() } else { table() })
-}
-
-/// `--eccentricity X,Y` of a three-dimensional preset: the centre of mass at the plan's centre when
-/// absent.
-pub fn eccentricity(given: Option<&[f64]>) -> Result<[f64; 2]> {
-    match given {
-        None => Ok([0.0, 0.0]),
-        Some([x, y]) => Ok([*x, *y]),
-        Some(_) => Err(Error::invalid("eccentricity", "give two numbers, X,Y in metres")),
-    }
 }

@@ -2,8 +2,9 @@
 //! three-dimensional building also each mode's shares of sway in x, sway in y and twist.
 
 use super::StudyArgs;
-use crate::error::{Error, Result};
-use crate::structure::spatial::{Dof, SpatialModes, frame40_3d};
+use crate::error::Result;
+use crate::structure::spatial::Dof;
+use crate::study::ECCENTRICITY_INPUTS;
 use clap::Args;
 use serde_json::json;
 use std::f64::consts::PI;
@@ -17,18 +18,12 @@ pub struct ModesArgs {
     /// Print JSON instead of a table.
     #[arg(long)]
     pub json: bool,
-    /// The centre of mass's offset from the plan's centre, `X,Y` in metres (`frame40-3d` only).
-    #[arg(long, value_name = "X,Y", value_delimiter = ',', allow_negative_numbers = true)]
-    pub eccentricity: Option<Vec<f64>>,
 }
 
 /// Runs `windmeta modes`: a table of the modes, or JSON with `--json`.
 pub fn modes(args: &ModesArgs) -> Result<String> {
     if args.study.is_spatial() {
         return spatial_modes(args);
-    }
-    if args.eccentricity.is_some() {
-        return Err(Error::invalid("eccentricity", "applies to the three-dimensional preset frame40-3d only"));
     }
     let study = args.study.study()?;
     let modes = &study.modes;
@@ -69,13 +64,13 @@ pub fn modes(args: &ModesArgs) -> Result<String> {
     Ok(out)
 }
 
-/// The modes of the three-dimensional preset (three retained unless `--modes` says otherwise, up to
-/// the building's 120 degrees of freedom).
+/// The retained modes of a three-dimensional study (up to its three degrees of freedom per floor),
+/// its centres of mass where the eccentricity inputs' means put them (`--fix eccentricity_y=2.44`).
 fn spatial_modes(args: &ModesArgs) -> Result<String> {
-    let eccentricity = super::args::eccentricity(args.eccentricity.as_deref())?;
-    let building = frame40_3d(eccentricity)?;
-    let modes = SpatialModes::of(&building, args.study.modes.unwrap_or(6))?;
-    let name = &args.study.preset;
+    let study = args.study.spatial_study()?;
+    let (building, modes) = (&study.structure, &study.modes);
+    let eccentricity = ECCENTRICITY_INPUTS.map(|name| study.inputs.marginal(name).map_or(0.0, |m| m.mean()));
+    let name = &study.name;
     let floors = building.floors();
     let component = |m: usize, d: Dof| -> Vec<f64> { (0..floors).map(|j| modes.at(m, j, d)).collect() };
     if args.json {

@@ -6,7 +6,7 @@ use super::simulate::WindChoice;
 use crate::analysis::{PeakSummary, reference_peak};
 use crate::error::{Error, Result};
 use crate::study::{Order, WindPath};
-use crate::uncertainty::{monte_carlo, rng_from_seed, stream_seed};
+use crate::uncertainty::{InputModel, Rng, monte_carlo, rng_from_seed, stream_seed};
 use clap::Args;
 use rayon::prelude::*;
 use serde_json::json;
@@ -34,7 +34,8 @@ pub struct SamplePeaksArgs {
     /// Integrate every floor instead of the retained modes.
     #[arg(long)]
     pub full_order: bool,
-    /// Wind path of a reduced-order run (a full-order run uses the floor field).
+    /// Wind path of a reduced-order run (a full-order run, and every run of a three-dimensional
+    /// study, uses the floor field).
     #[arg(long, value_enum, default_value = "modal")]
     pub wind: WindChoice,
     /// The peak response recorded per storm.
@@ -53,66 +54,112 @@ pub fn sample_peaks(args: &SamplePeaksArgs) -> Result<String> {
             format!("must be between 1 and {MAX_REFERENCE_SAMPLES}, got {}", args.samples),
         ));
     }
+    let order = if args.full_order { Order::Full } else { Order::Reduced };
+    if args.study.is_spatial() {
+        let mut study = args.study.spatial_study()?;
+        if args.nominal {
+            study.inputs = study.inputs.nominal();
+        }
+        let response = args.response.spatial_response(&study)?;
+        let sampled = Sampled {
+            name: &study.name,
+            duration: study.storm.duration,
+            response: serde_json::to_value(response).expect("plain JSON"),
+            per_storm: response.per_storm(),
+            unit: response.unit(),
+        };
+        let dt = study.storm.time_step;
+        return sampled.report(args, &study.inputs, &|x, rng| {
+            response.of_run(&study.reference_run(x, order, rng)?, &study.structure, dt)
+        });
+    }
     let mut study = args.study.study()?;
     if args.nominal {
         study.inputs = study.inputs.nominal();
     }
     let response = args.response.response(&study)?;
-    let started = Instant::now();
-    let inputs = monte_carlo(&study.inputs, args.samples, &mut rng_from_seed(args.seed));
-    let order = if args.full_order { Order::Full } else { Order::Reduced };
     let path =
         if args.full_order || matches!(args.wind, WindChoice::Field) { WindPath::Field } else { WindPath::Modal };
-    let done = AtomicUsize::new(0);
-    let step = (args.samples / 10).max(1);
-    let peaks = inputs
-        .par_iter()
-        .enumerate()
-        .map(|(k, x)| {
-            let run = study.reference_run(x, order, path, &mut rng_from_seed(stream_seed(args.seed, k as u64)))?;
-            let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
-            if finished.is_multiple_of(step) || finished == args.samples {
-                eprintln!("{finished}/{} storms, {:.1} s", args.samples, started.elapsed().as_secs_f64());
-            }
-            reference_peak(&study, x, &run, response)
-        })
-        .collect::<Result<Vec<f64>>>()?;
-    let summary = PeakSummary::of(&peaks);
-    let seconds = started.elapsed().as_secs_f64();
-    if args.json {
-        let quantiles: serde_json::Map<String, serde_json::Value> =
-            summary.quantiles.iter().map(|(p, v)| (format!("{p}"), json!(v))).collect();
-        let value = json!({
-            "preset": study.name,
-            "samples": args.samples,
-            "seed": args.seed,
-            "nominal": args.nominal,
-            "order": if args.full_order { "full" } else { "reduced" },
-            "duration_s": study.storm.duration,
-            "response": response,
-            "unit": response.unit(),
-            "peaks": peaks,
-            "mean": summary.mean,
-            "sd": summary.sd,
-            "quantiles": quantiles,
-            "seconds": seconds,
-        });
-        return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
+    let sampled = Sampled {
+        name: &study.name,
+        duration: study.storm.duration,
+        response: serde_json::to_value(response).expect("plain JSON"),
+        per_storm: response.per_storm(),
+        unit: response.unit(),
+    };
+    sampled.report(args, &study.inputs, &|x, rng| {
+        reference_peak(&study, x, &study.reference_run(x, order, path, rng)?, response)
+    })
+}
+
+/// A storm's one value of the response at inputs `x`, its wind from `rng`.
+type StormValue<'a> = dyn Fn(&[f64], &mut Rng) -> Result<f64> + Sync + 'a;
+
+/// What the storms of `sample-peaks` are run for: the study and the response, as reported.
+struct Sampled<'a> {
+    name: &'a str,
+    duration: f64,
+    response: serde_json::Value,
+    per_storm: String,
+    unit: &'static str,
+}
+
+impl Sampled<'_> {
+    /// Runs the storms on every core (sample k's wind from stream k of the seed) and reports.
+    fn report(&self, args: &SamplePeaksArgs, inputs: &InputModel, value: &StormValue) -> Result<String> {
+        let started = Instant::now();
+        let samples = monte_carlo(inputs, args.samples, &mut rng_from_seed(args.seed));
+        let done = AtomicUsize::new(0);
+        let step = (args.samples / 10).max(1);
+        let peaks = samples
+            .par_iter()
+            .enumerate()
+            .map(|(k, x)| {
+                let peak = value(x, &mut rng_from_seed(stream_seed(args.seed, k as u64)))?;
+                let finished = done.fetch_add(1, Ordering::Relaxed) + 1;
+                if finished.is_multiple_of(step) || finished == args.samples {
+                    eprintln!("{finished}/{} storms, {:.1} s", args.samples, started.elapsed().as_secs_f64());
+                }
+                Ok(peak)
+            })
+            .collect::<Result<Vec<f64>>>()?;
+        let summary = PeakSummary::of(&peaks);
+        let seconds = started.elapsed().as_secs_f64();
+        let unit = self.unit;
+        if args.json {
+            let quantiles: serde_json::Map<String, serde_json::Value> =
+                summary.quantiles.iter().map(|(p, v)| (format!("{p}"), json!(v))).collect();
+            let value = json!({
+                "preset": self.name,
+                "samples": args.samples,
+                "seed": args.seed,
+                "nominal": args.nominal,
+                "order": if args.full_order { "full" } else { "reduced" },
+                "duration_s": self.duration,
+                "response": self.response,
+                "unit": unit,
+                "peaks": peaks,
+                "mean": summary.mean,
+                "sd": summary.sd,
+                "quantiles": quantiles,
+                "seconds": seconds,
+            });
+            return Ok(serde_json::to_string_pretty(&value).expect("plain JSON"));
+        }
+        let mut out = format!(
+            "{}: {} of {} storms of {} s ({} inputs, seed {})\n",
+            self.name,
+            self.per_storm,
+            args.samples,
+            self.duration,
+            if args.nominal { "nominal" } else { "random" },
+            args.seed
+        );
+        out += &format!("mean {:.5} {unit}, sd {:.5} {unit}\n", summary.mean, summary.sd);
+        for (p, v) in &summary.quantiles {
+            out += &format!("  q{:<5} {v:.5} {unit}\n", p);
+        }
+        out += &format!("{seconds:.1} s in all\n");
+        Ok(out)
     }
-    let mut out = format!(
-        "{}: {} of {} storms of {} s ({} inputs, seed {})\n",
-        study.name,
-        response.per_storm(),
-        args.samples,
-        study.storm.duration,
-        if args.nominal { "nominal" } else { "random" },
-        args.seed
-    );
-    let unit = response.unit();
-    out += &format!("mean {:.5} {unit}, sd {:.5} {unit}\n", summary.mean, summary.sd);
-    for (p, v) in &summary.quantiles {
-        out += &format!("  q{:<5} {v:.5} {unit}\n", p);
-    }
-    out += &format!("{seconds:.1} s in all\n");
-    Ok(out)
 }

@@ -48,23 +48,12 @@ pub struct SimulateArgs {
     /// Print the inputs, every floor's peaks and the timings as JSON.
     #[arg(long)]
     pub json: bool,
-    /// Three-dimensional preset only: the centre of mass's offset from the plan's centre, `X,Y` (m).
-    #[arg(long, value_name = "X,Y", value_delimiter = ',', allow_negative_numbers = true)]
-    pub eccentricity: Option<Vec<f64>>,
-    /// Three-dimensional preset only: across-wind and torsional loads from this wind-tunnel data
-    /// file (docs/wind-tunnel-data.md) instead of the published model.
-    #[arg(long, value_name = "FILE")]
-    pub wind_tunnel: Option<PathBuf>,
 }
 
 /// Runs `windmeta simulate`: one storm at the inputs' means (or fixed values) and its peaks.
 pub fn simulate(args: &SimulateArgs) -> Result<String> {
     if args.study.is_spatial() {
         return super::simulate_spatial::simulate_spatial(args);
-    }
-    if args.eccentricity.is_some() || args.wind_tunnel.is_some() {
-        let field = if args.eccentricity.is_some() { "eccentricity" } else { "wind-tunnel" };
-        return Err(Error::invalid(field, "applies to the three-dimensional preset frame40-3d only"));
     }
     let started = Instant::now();
     let study = args.study.study()?;
@@ -87,7 +76,13 @@ pub fn simulate(args: &SimulateArgs) -> Result<String> {
         let responses = history_responses(args, &study)?;
         let histories =
             responses.iter().map(|&r| reference_history(&study, &x, &run, r)).collect::<Result<Vec<Vec<f64>>>>()?;
-        write_histories(path, &responses, &histories, dt)?;
+        let columns: Vec<String> = responses
+            .iter()
+            .map(|r| {
+                format!("{}_{}_{}", r.kind().name(), r.floor().map_or(String::new(), |f| f.to_string()), r.unit_tag())
+            })
+            .collect();
+        write_histories(path, &columns, &histories, dt)?;
     }
     // Every response at every floor where it exists.
     let mut peaks = serde_json::Map::new();
@@ -169,17 +164,11 @@ fn history_responses(args: &SimulateArgs, study: &Study) -> Result<Vec<Response>
     }
     let mut responses = Vec::new();
     for kind in kinds {
-        match args.history_floors.as_deref().map(str::trim) {
-            None => responses.push(kind.located(None, None, &study.structure)?),
-            Some("all") => responses.extend(profile_responses(kind, study)?),
-            Some(list) => {
-                for floor in list.split(',') {
-                    let floor = floor.trim().parse::<usize>().map_err(|_| {
-                        Error::invalid(
-                            "history-floors",
-                            format!("`{floor}` is not a floor; give `all` or floors such as 1,20,40"),
-                        )
-                    })?;
+        match history_floors(args)? {
+            HistoryFloors::Roof => responses.push(kind.located(None, None, &study.structure)?),
+            HistoryFloors::All => responses.extend(profile_responses(kind, study)?),
+            HistoryFloors::These(floors) => {
+                for floor in floors {
                     responses.push(kind.located(Some(floor), None, &study.structure)?);
                 }
             }
@@ -188,14 +177,42 @@ fn history_responses(args: &SimulateArgs, study: &Study) -> Result<Vec<Response>
     Ok(responses)
 }
 
-/// Writes `histories` (one per response, `dt` apart) as CSV: t_s, then a column per response.
-fn write_histories(path: &Path, responses: &[Response], histories: &[Vec<f64>], dt: f64) -> Result<()> {
+/// The floors `--history-floors` names.
+pub(super) enum HistoryFloors {
+    /// The roof (the default).
+    Roof,
+    /// Every floor where the response exists.
+    All,
+    /// These floors (1-based, unchecked).
+    These(Vec<usize>),
+}
+
+/// Reads `--history-floors`: `all` or a list such as 1,20,40; the roof when absent.
+pub(super) fn history_floors(args: &SimulateArgs) -> Result<HistoryFloors> {
+    Ok(match args.history_floors.as_deref().map(str::trim) {
+        None => HistoryFloors::Roof,
+        Some("all") => HistoryFloors::All,
+        Some(list) => HistoryFloors::These(
+            list.split(',')
+                .map(|floor| {
+                    floor.trim().parse::<usize>().map_err(|_| {
+                        Error::invalid(
+                            "history-floors",
+                            format!("`{floor}` is not a floor; give `all` or floors such as 1,20,40"),
+                        )
+                    })
+                })
+                .collect::<Result<_>>()?,
+        ),
+    })
+}
+
+/// Writes `histories` (one per column, `dt` apart) as CSV: t_s, then a column per response.
+pub(super) fn write_histories(path: &Path, columns: &[String], histories: &[Vec<f64>], dt: f64) -> Result<()> {
     let failed = |e: csv::Error| Error::invalid("out", format!("{}: {e}", path.display()));
     let mut writer = csv::Writer::from_path(path).map_err(failed)?;
     let mut header = vec!["t_s".to_string()];
-    header.extend(responses.iter().map(|r| {
-        format!("{}_{}_{}", r.kind().name(), r.floor().map_or(String::new(), |f| f.to_string()), r.unit_tag())
-    }));
+    header.extend(columns.iter().cloned());
     writer.write_record(&header).map_err(failed)?;
     let steps = histories.first().map_or(0, Vec::len);
     for t in 0..steps {

@@ -1,12 +1,12 @@
 //! `windmeta simulate` of a three-dimensional building: one storm from a direction through its
 //! reference model, and every floor's peaks per direction, in twist and at its worst corner.
 
-use super::simulate::SimulateArgs;
-use crate::analysis::STANDARD_GRAVITY;
+use super::simulate::{HistoryFloors, SimulateArgs, history_floors, write_histories};
+use crate::analysis::{STANDARD_GRAVITY, SpatialKind, SpatialResponse};
 use crate::error::{Error, Result};
-use crate::study::{FloorPeaks, Order};
+use crate::structure::spatial::Dof;
+use crate::study::{FloorPeaks, Order, SpatialRun, SpatialStudy};
 use crate::uncertainty::rng_from_seed;
-use crate::wind::aerodynamic::{Aerodynamics, TunnelData};
 use serde_json::json;
 use std::time::Instant;
 
@@ -16,43 +16,39 @@ type Column<'a> = &'a dyn Fn(&FloorPeaks) -> f64;
 /// Runs `windmeta simulate` on a three-dimensional preset: one storm at the inputs' means (the
 /// direction's mean is 180° unless fixed) and its peaks.
 pub fn simulate_spatial(args: &SimulateArgs) -> Result<String> {
-    if args.out.is_some() || !args.histories.is_empty() || args.history_floors.is_some() {
-        return Err(Error::invalid("out", "histories of a three-dimensional building are not written yet"));
-    }
     let started = Instant::now();
-    let aerodynamics = match &args.wind_tunnel {
-        None => Aerodynamics::Published,
-        Some(path) => {
-            let text = std::fs::read_to_string(path)
-                .map_err(|e| Error::invalid("wind-tunnel", format!("cannot read {}: {e}", path.display())))?;
-            Aerodynamics::Tunnel(TunnelData::from_json(&text).map_err(|e| match e {
-                Error::Invalid { field, reason } => {
-                    Error::invalid(format!("wind-tunnel {}: {field}", path.display()), reason)
-                }
-                other => other,
-            })?)
+    let study = args.study.spatial_study()?;
+    // Checked before the storm runs.
+    let histories = match &args.out {
+        Some(_) => history_responses(args, &study)?,
+        None if !args.histories.is_empty() || args.history_floors.is_some() => {
+            return Err(Error::invalid("out", "--history and --history-floors need --out FILE"));
         }
+        None => Vec::new(),
     };
-    let eccentricity = super::args::eccentricity(args.eccentricity.as_deref())?;
-    let study = args.study.spatial_study(eccentricity, aerodynamics)?;
     let x = study.inputs.means();
     let order = if args.full_order { Order::Full } else { Order::Reduced };
     let setup_seconds = started.elapsed().as_secs_f64();
     let started = Instant::now();
     let run = study.reference_run(&x, order, &mut rng_from_seed(args.seed))?;
     let run_seconds = started.elapsed().as_secs_f64();
-    let peaks = run.floor_peaks(&study.structure);
+    if let Some(path) = &args.out {
+        write_spatial_histories(path, &histories, &run, &study)?;
+    }
+    let peaks = run.floor_peaks(&study.structure, study.storm.time_step);
+    let eccentricity = study.parameters(&x)?.eccentricity;
     let inputs: serde_json::Map<String, serde_json::Value> =
         study.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
     let order_name = if args.full_order { "full" } else { "reduced" };
-    let loads = if args.wind_tunnel.is_some() { "wind-tunnel data" } else { "the published model" };
+    let tunnel = args.study.wind_tunnel.is_some();
+    let loads = if tunnel { "wind-tunnel data" } else { "the published model" };
     let corners = study.structure.plans[0].corners();
     if args.json {
         let column = |f: &dyn Fn(&FloorPeaks) -> f64| peaks.iter().map(f).collect::<Vec<f64>>();
         let value = json!({
             "preset": study.name,
             "order": order_name,
-            "wake_loads": if args.wind_tunnel.is_some() { "wind_tunnel" } else { "published" },
+            "wake_loads": if tunnel { "wind_tunnel" } else { "published" },
             "eccentricity_m": eccentricity,
             "seed": args.seed,
             "duration_s": study.storm.duration,
@@ -117,6 +113,57 @@ pub fn simulate_spatial(args: &SimulateArgs) -> Result<String> {
         milli_g(roof.corner.peak),
         milli_g(roof.corner.rms)
     );
+    if let Some(path) = &args.out {
+        out += &format!("histories written to {}\n", path.display());
+    }
     out += &format!("time: setup {setup_seconds:.3} s, storm {run_seconds:.3} s\n");
     Ok(out)
+}
+
+/// The responses whose histories `--out` writes: each `--history` kind (displacement by default)
+/// along x, y and in twist (drift along x and y; corner_acceleration at the worst corner) at each
+/// of `--history-floors` (the roof by default).
+fn history_responses(args: &SimulateArgs, study: &SpatialStudy) -> Result<Vec<SpatialResponse>> {
+    let kinds = if args.histories.is_empty() {
+        vec![SpatialKind::Displacement]
+    } else {
+        args.histories.iter().map(|k| SpatialKind::parse(k)).collect::<Result<_>>()?
+    };
+    if let Some(rms) = kinds.iter().find(|k| k.is_rms()) {
+        return Err(Error::invalid(
+            "history",
+            format!("{} is one value per storm (in the run's peaks); its history is the peak's kind", rms.name()),
+        ));
+    }
+    let floors = match history_floors(args)? {
+        HistoryFloors::Roof => vec![study.structure.floors()],
+        HistoryFloors::All => (1..=study.structure.floors()).collect(),
+        HistoryFloors::These(floors) => floors,
+    };
+    let mut responses = Vec::new();
+    for kind in kinds {
+        let directions: &[Option<Dof>] = match kind {
+            _ if kind.at_corners() => &[None],
+            SpatialKind::Drift => &[Some(Dof::X), Some(Dof::Y)],
+            _ => &[Some(Dof::X), Some(Dof::Y), Some(Dof::Rotation)],
+        };
+        for &floor in &floors {
+            for &direction in directions {
+                responses.push(SpatialResponse::located(kind, Some(floor), direction, &study.structure)?);
+            }
+        }
+    }
+    Ok(responses)
+}
+
+/// Writes the histories of `responses` in `run` as CSV, a column each (kind, floor, direction, unit).
+fn write_spatial_histories(
+    path: &std::path::Path,
+    responses: &[SpatialResponse],
+    run: &SpatialRun,
+    study: &SpatialStudy,
+) -> Result<()> {
+    let histories = responses.iter().map(|r| r.history(run, &study.structure)).collect::<Result<Vec<Vec<f64>>>>()?;
+    let columns: Vec<String> = responses.iter().map(SpatialResponse::column).collect();
+    write_histories(path, &columns, &histories, study.storm.time_step)
 }

@@ -44,48 +44,56 @@ pub struct Dampers {
 impl Dampers {
     /// `group_coefficients[g]` is the coefficient of every damper in group g.
     pub fn new(structure: &Structure, group_coefficients: &[f64], exponent: f64) -> Result<Self> {
-        check_law(structure.damper_groups(), group_coefficients, exponent)?;
-        let floor_weights = structure
-            .dampers
-            .iter()
-            .map(|d| {
-                let mut row = vec![(d.upper_floor, d.cos_angle)];
-                if let Some(lower) = d.lower_floor {
-                    row.push((lower, -d.cos_angle));
-                }
-                row
-            })
-            .collect();
-        let coefficients = structure.dampers.iter().map(|d| group_coefficients[d.group]).collect();
-        Ok(Dampers { coefficients, exponent, floor_weights })
+        let rows = structure.dampers.iter().map(|d| {
+            let mut row = vec![(d.upper_floor, d.cos_angle)];
+            if let Some(lower) = d.lower_floor {
+                row.push((lower, -d.cos_angle));
+            }
+            (d.group, row)
+        });
+        Dampers::from_rows(rows, structure.damper_groups(), group_coefficients, exponent)
     }
 
     /// The dampers of a three-dimensional building: each one's axial velocity is cos θ times the
     /// relative velocity of its two floors at its point of the plan, along its direction, so its
     /// row weighs both floors' sway and twist (degrees of freedom as [`dof`]).
     pub fn spatial(structure: &SpatialStructure, group_coefficients: &[f64], exponent: f64) -> Result<Self> {
-        check_law(structure.damper_groups(), group_coefficients, exponent)?;
-        let floor_weights = structure
-            .dampers
-            .iter()
-            .map(|d| {
-                let placement = &d.placement;
-                let floor_row = |floor: usize, sign: f64| {
-                    let weights = d.weights(structure.centres_of_mass[floor]);
-                    [Dof::X, Dof::Y, Dof::Rotation]
-                        .into_iter()
-                        .filter(move |&k| weights[k as usize] != 0.0)
-                        .map(move |k| (dof(floor, k), sign * placement.cos_angle * weights[k as usize]))
-                };
-                let mut row: Vec<(usize, f64)> = floor_row(placement.upper_floor, 1.0).collect();
-                if let Some(lower) = placement.lower_floor {
-                    row.extend(floor_row(lower, -1.0));
-                }
-                row
-            })
-            .collect();
-        let coefficients = structure.dampers.iter().map(|d| group_coefficients[d.placement.group]).collect();
+        let rows = structure.dampers.iter().map(|d| {
+            let placement = &d.placement;
+            let floor_row = |floor: usize, sign: f64| {
+                let weights = d.weights(structure.centres_of_mass[floor]);
+                [Dof::X, Dof::Y, Dof::Rotation]
+                    .into_iter()
+                    .filter(move |&k| weights[k as usize] != 0.0)
+                    .map(move |k| (dof(floor, k), sign * placement.cos_angle * weights[k as usize]))
+            };
+            let mut row: Vec<(usize, f64)> = floor_row(placement.upper_floor, 1.0).collect();
+            if let Some(lower) = placement.lower_floor {
+                row.extend(floor_row(lower, -1.0));
+            }
+            (placement.group, row)
+        });
+        Dampers::from_rows(rows, structure.damper_groups(), group_coefficients, exponent)
+    }
+
+    /// The dampers of `rows` (each damper's group and its velocity row), the law checked first.
+    fn from_rows(
+        rows: impl Iterator<Item = (usize, Vec<(usize, f64)>)>,
+        groups: usize,
+        group_coefficients: &[f64],
+        exponent: f64,
+    ) -> Result<Self> {
+        check_law(groups, group_coefficients, exponent)?;
+        let (coefficients, floor_weights) = rows.map(|(group, row)| (group_coefficients[group], row)).unzip();
         Ok(Dampers { coefficients, exponent, floor_weights })
+    }
+
+    /// The law's exponent lies in (0, 2]: what a study checks before any sample's coefficients.
+    pub fn check_exponent(exponent: f64) -> Result<()> {
+        if !(exponent.is_finite() && exponent > 0.0 && exponent <= 2.0) {
+            return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {exponent}")));
+        }
+        Ok(())
     }
 
     /// Number of dampers.
@@ -116,9 +124,7 @@ impl Dampers {
 
 /// The law's exponent lies in (0, 2] and each of the `groups` coefficients is finite and ≥ 0.
 fn check_law(groups: usize, group_coefficients: &[f64], exponent: f64) -> Result<()> {
-    if !(exponent.is_finite() && exponent > 0.0 && exponent <= 2.0) {
-        return Err(Error::invalid("damper_exponent", format!("must lie in (0, 2], got {exponent}")));
-    }
+    Dampers::check_exponent(exponent)?;
     if group_coefficients.len() != groups {
         return Err(Error::invalid(
             "damper coefficients",

@@ -273,6 +273,7 @@ fn linear_three_dimensional_responses_agree_with_random_vibration() {
             &roof_accelerations[0],
             &roof_accelerations[1],
             &roof_accelerations[2],
+            1,
         );
         corner_square += corner.rms * corner.rms;
     }

@@ -75,6 +75,7 @@ impl CalibrationRequest {
         let spec = StudySpec {
             preset,
             structure: self.structure.clone(),
+            spatial_structure: None,
             inputs: self.inputs.clone(),
             wind: self.wind.clone(),
             damper_exponent: self.damper_exponent,

@@ -15,7 +15,7 @@ mod storms;
 
 pub use inputs::{PhysicalParameters, WIND_DIRECTION, WIND_SPEED};
 pub use presets::{DEFAULT_PRESET, PRESETS, SPATIAL_PRESETS};
-pub use spatial::{FloorPeaks, SPATIAL_MODES, SpatialRun, SpatialStudy};
+pub use spatial::{ECCENTRICITY_INPUTS, FloorPeaks, SPATIAL_MODES, SpatialParameters, SpatialRun, SpatialStudy};
 pub use spec::StudySpec;
 pub use storms::{Order, StormRun, WindPath};
 

@@ -7,9 +7,8 @@ use crate::structure::{Structure, frame40};
 /// The built-in studies: the paper's frame with damper coefficients as printed (N·s/m) and the same
 /// numbers in kN·s/m, where the dampers really act.
 pub const PRESETS: [&str; 2] = ["frame40", "frame40-kn"];
-/// The built-in three-dimensional buildings: `windmeta modes` shows their modes and `windmeta
-/// simulate` runs a storm through them ([`super::SpatialStudy`]); the other study commands do not
-/// take them yet.
+/// The built-in three-dimensional buildings ([`super::SpatialStudy`]): `windmeta modes`,
+/// `simulate` and `sample-peaks` take them; the metamodel's commands do not yet.
 pub const SPATIAL_PRESETS: [&str; 1] = ["frame40-3d"];
 /// The study a calibration request without a preset or a structure calibrates.
 pub const DEFAULT_PRESET: &str = "frame40-kn";
@@ -17,6 +16,13 @@ pub const DEFAULT_PRESET: &str = "frame40-kn";
 /// The study's name, its structure and the scale of its damper coefficients' default range
 /// (1 for N·s/m as printed, 1000 for kN·s/m), from the spec's preset and custom structure.
 pub(super) fn resolve(spec: &StudySpec) -> Result<(String, Structure, f64)> {
+    if spec.spatial_structure.is_some() {
+        return Err(Error::invalid(
+            "spatial_structure",
+            "a three-dimensional building: `windmeta modes`, `simulate` and `sample-peaks` take it, calibrations \
+             and the metamodel's answers do not yet",
+        ));
+    }
     let (name, damper_scale) = match spec.preset.as_deref() {
         Some("frame40") => ("frame40", 1.0),
         Some("frame40-kn") => ("frame40-kn", 1000.0),
@@ -24,8 +30,8 @@ pub(super) fn resolve(spec: &StudySpec) -> Result<(String, Structure, f64)> {
             return Err(Error::invalid(
                 "preset",
                 format!(
-                    "`{spatial}` is a three-dimensional building: `windmeta modes` and `windmeta simulate` take it, \
-                     this command does not yet (it takes {})",
+                    "`{spatial}` is a three-dimensional building: `windmeta modes`, `simulate` and `sample-peaks` \
+                     take it, this command does not yet (it takes {})",
                     PRESETS.join(", ")
                 ),
             ));

@@ -1,6 +1,7 @@
 //! A study as it arrives from a file or a request.
 
 use crate::structure::CustomStructure;
+use crate::structure::spatial::CustomSpatialStructure;
 use crate::uncertainty::Marginal;
 use crate::wind::WindSite;
 use serde::{Deserialize, Serialize};
@@ -16,6 +17,10 @@ pub struct StudySpec {
     pub preset: Option<String>,
     /// A custom structure instead of the preset's.
     pub structure: Option<CustomStructure>,
+    /// A custom three-dimensional building (sway along x and y and twist at every floor) instead
+    /// of a three-dimensional preset's; the command line's `modes`, `simulate` and `sample-peaks`
+    /// take it, calibrations do not yet.
+    pub spatial_structure: Option<CustomSpatialStructure>,
     /// Marginals that replace the defaults, by input name.
     pub inputs: BTreeMap<String, Marginal>,
     /// The wind site; the paper's when absent.

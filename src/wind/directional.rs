@@ -25,7 +25,6 @@ pub struct DirectionalWind {
     heights: Vec<f64>,
     /// Each floor's plan extent along x and along y (m).
     extents: Vec<[f64; 2]>,
-    centres_of_mass: Vec<[f64; 2]>,
 }
 
 impl DirectionalWind {
@@ -38,7 +37,6 @@ impl DirectionalWind {
             aerodynamics,
             heights: structure.floor_elevations.clone(),
             extents: structure.plans.iter().map(|p| [p.breadth, p.depth]).collect(),
-            centres_of_mass: structure.centres_of_mass.clone(),
         })
     }
 
@@ -69,24 +67,33 @@ impl DirectionalWind {
         WakeField::new(&loads, geometry).map(Some)
     }
 
-    /// One storm's loads on every degree of freedom (floor-major x, y, θ about the floor's centre
-    /// of mass): the drag's field, then the wake's, from `rng` in that order.
+    /// One storm's loads on every degree of freedom (floor-major x, y, θ about each floor's centre
+    /// of mass, at `centres_of_mass` from its plan's centre: a sample's eccentricity moves them):
+    /// the drag's field, then the wake's, from `rng` in that order.
     pub fn floor_forces(
         &self,
         station_speed: f64,
         direction_deg: f64,
+        centres_of_mass: &[[f64; 2]],
         storm: &StormGrid,
         rng: &mut Rng,
     ) -> Result<FloorForces> {
         let [cos, sin] = unit(direction_deg)?;
+        if centres_of_mass.len() != self.heights.len() {
+            return Err(Error::Internal(format!(
+                "{} centres of mass for a building of {} floors",
+                centres_of_mass.len(),
+                self.heights.len()
+            )));
+        }
         let drag = self.drag(direction_deg)?.floor_forces(station_speed, storm, rng)?;
-        let mut forces = drag.on_plan([cos, sin], &self.centres_of_mass);
+        let mut forces = drag.on_plan([cos, sin], centres_of_mass);
         if let Some(field) = self.wake(station_speed, direction_deg)? {
             let n = self.heights.len();
             let grid = super::SpectralGrid { lines: self.site.frequencies, cutoff: self.site.cutoff_rad_s };
             let wake = simulate(&field, &grid, self.site.field_generation_step_s, storm, rng)?;
             for j in 0..n {
-                let arms = plan_arms([-sin, cos], self.centres_of_mass[j]);
+                let arms = plan_arms([-sin, cos], centres_of_mass[j]);
                 for (d, arm) in arms.iter().enumerate() {
                     let series = &mut forces.series[DOFS_PER_FLOOR * j + d];
                     series.iter_mut().zip(&wake[j]).for_each(|(f, w)| *f += arm * w);

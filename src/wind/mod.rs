@@ -17,7 +17,7 @@ pub use directional::DirectionalWind;
 pub use histories::{CoarseModalForces, FloorForces, ForceSource, ModalForces};
 pub use loads::WindLoads;
 pub use modal::ModalWind;
-pub use site::{StormGrid, WindSite};
+pub use site::{RMS_SAMPLING_INTERVAL_S, StormGrid, WindSite, rms_stride};
 pub use spectral::{CoarseSeries, CrossSpectralDensity, CubicSchedule, SpectralGrid, simulate, simulate_coarse};
 pub use spectrum::{FieldSpectrum, Projected, ProjectedSpectrum};
 pub use transform::TransformWorkspace;

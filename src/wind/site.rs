@@ -147,6 +147,18 @@ impl WindSite {
     }
 }
 
+/// The interval (s) at which an RMS acceleration samples the storm's acceleration. Every step's
+/// acceleration needs every damper's force (a power each), which at 100 Hz made a metamodel's RMS
+/// seventy times as costly as its peak; sampled at 10 Hz, nine samples a period of the highest
+/// retained mode (7 rad/s), the RMS of six reference histories moved by at most 1.6·10⁻⁴ every 8th
+/// step and 3.4·10⁻⁴ every 16th (docs/method.md). Reference and metamodel sample alike, so they are compared on one definition.
+pub const RMS_SAMPLING_INTERVAL_S: f64 = 0.1;
+
+/// Every how many steps of `time_step` (s) an RMS acceleration samples the storm.
+pub fn rms_stride(time_step: f64) -> usize {
+    ((RMS_SAMPLING_INTERVAL_S / time_step).round() as usize).max(1)
+}
+
 /// The time grid of one storm: `steps()` instants 0, Δt, …, T.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct StormGrid {

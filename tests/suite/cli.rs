@@ -55,12 +55,12 @@ fn modes_of_the_three_dimensional_preset_show_their_shares() {
         assert!((v["shares"][m][kind].as_f64().unwrap() - 1.0).abs() < 1e-9, "mode {}: {}", m + 1, v["shares"][m]);
     }
     assert_eq!(v["shapes"][0]["x_m"].as_array().unwrap().len(), 40);
-    let eccentric = json(&["modes", "--preset", "frame40-3d", "--json", "--eccentricity", "0,2.44"]);
+    let eccentric = json(&["modes", "--preset", "frame40-3d", "--json", "--fix", "eccentricity_y=2.44"]);
     let twist = eccentric["shares"][0]["rotation"].as_f64().unwrap();
     assert!(twist > 1e-3 && twist < 0.1, "the first mode's twist share {twist}");
-    refused(&["modes", "--preset", "frame40-3d", "--eccentricity", "0,9"], "eccentricity_m");
-    refused(&["modes", "--preset", "frame40", "--eccentricity", "0,1"], "eccentricity");
-    refused(&["sample-peaks", "--preset", "frame40-3d"], "three-dimensional");
+    refused(&["modes", "--preset", "frame40-3d", "--fix", "eccentricity_y=9"], "inputs.eccentricity_y");
+    refused(&["modes", "--preset", "frame40", "--fix", "eccentricity_y=1"], "eccentricity_y");
+    refused(&["exceedance", "--preset", "frame40-3d"], "three-dimensional");
 }
 
 /// One storm from a direction on the three-dimensional preset: the square building turned by 90°
@@ -113,8 +113,103 @@ fn simulate_runs_the_three_dimensional_preset_from_a_direction() {
         &["simulate", "--preset", "frame40-3d", "--duration", "60", "--wind-tunnel", "/nonexistent.json"],
         "wind-tunnel",
     );
-    refused(&["simulate", "--preset", "frame40-kn", "--eccentricity", "1,0"], "eccentricity");
+    refused(&["simulate", "--preset", "frame40-kn", "--wind-tunnel", tunnel], "wind-tunnel");
     refused(&["simulate", "--preset", "frame40-3d", "--fix", "wind_direction=NaN"], "wind_direction");
+
+    // Histories: every direction of the roof's displacement and its worst corner's acceleration,
+    // whose peaks are the run's.
+    let dir = std::env::temp_dir().join(format!("windmeta-3d-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let csv = dir.join("histories.csv");
+    let csv_arg = csv.to_str().unwrap();
+    let written = run("30", &["--out", csv_arg, "--history", "displacement", "--history", "corner_acceleration"]);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    assert_eq!(
+        header,
+        [
+            "t_s",
+            "displacement_40_x_m",
+            "displacement_40_y_m",
+            "displacement_40_rotation_rad",
+            "corner_acceleration_40_m_s2"
+        ]
+    );
+    let mut largest = [0.0f64; 4];
+    for line in lines {
+        for (l, v) in largest.iter_mut().zip(line.split(',').skip(1)) {
+            *l = l.max(v.parse::<f64>().unwrap().abs());
+        }
+    }
+    for (l, name) in
+        largest.iter().zip(["displacement_x_m", "displacement_y_m", "rotation_rad", "corner_acceleration_m_s2"])
+    {
+        let peak = column(&written, name)[39];
+        assert!((l / peak - 1.0).abs() < 1e-8, "{name}: history's largest {l} against the peak {peak}");
+    }
+    refused(
+        &["simulate", "--preset", "frame40-3d", "--out", csv_arg, "--history", "rms_corner_acceleration"],
+        "history",
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Peaks of a three-dimensional building over storms from random directions, by response and
+/// direction; an uncertain eccentricity is an input like the others.
+#[test]
+fn sample_peaks_runs_the_three_dimensional_preset() {
+    let base =
+        ["sample-peaks", "--preset", "frame40-3d", "--samples", "2", "--duration", "30", "--modes", "6", "--json"];
+    let peaks = |extra: &[&str]| -> Vec<f64> {
+        let args: Vec<&str> = base.iter().chain(extra).copied().collect();
+        let v = json(&args);
+        v["peaks"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect()
+    };
+    let corner = peaks(&["--response", "corner_acceleration"]);
+    let along_x = peaks(&["--response", "acceleration", "--direction", "x"]);
+    let along_y = peaks(&["--response", "acceleration", "--direction", "y"]);
+    assert_eq!(corner.len(), 2);
+    for k in 0..2 {
+        assert!(
+            corner[k] >= along_x[k].max(along_y[k]) * (1.0 - 1e-12),
+            "storm {k}: {corner:?} {along_x:?} {along_y:?}"
+        );
+    }
+    let spec_dir = std::env::temp_dir().join(format!("windmeta-3d-spec-{}", std::process::id()));
+    std::fs::create_dir_all(&spec_dir).unwrap();
+    let spec = spec_dir.join("eccentric.json");
+    std::fs::write(
+        &spec,
+        r#"{"preset": "frame40-3d", "inputs": {"eccentricity_y": {"distribution": "uniform", "lower": -1.2, "upper": 1.2}}}"#,
+    )
+    .unwrap();
+    let v = json(&[
+        "sample-peaks",
+        "--spec",
+        spec.to_str().unwrap(),
+        "--samples",
+        "2",
+        "--duration",
+        "30",
+        "--response",
+        "displacement",
+        "--direction",
+        "rotation",
+        "--json",
+    ]);
+    assert!(v["peaks"][0].as_f64().unwrap() > 0.0, "{v}");
+    std::fs::write(
+        &spec,
+        r#"{"preset": "frame40-3d", "inputs": {"eccentricity_y": {"distribution": "normal", "mean": 0, "sd": 3}}}"#,
+    )
+    .unwrap();
+    refused(&["sample-peaks", "--spec", spec.to_str().unwrap(), "--samples", "2"], "inputs.eccentricity_y");
+    std::fs::remove_dir_all(&spec_dir).ok();
+    let base = &base[..8];
+    refused(&[base, &["--response", "acceleration"][..]].concat(), "direction");
+    refused(&[base, &["--response", "damper_force", "--direction", "x"][..]].concat(), "response");
+    refused(&["sample-peaks", "--preset", "frame40-kn", "--direction", "x"], "direction");
 }
 
 #[test]
@@ -447,5 +542,69 @@ fn a_building_whose_highest_mode_leaves_the_roof_at_rest_runs() {
         let v = json(&[&["simulate", "--spec", three, "--json"][..], order].concat());
         assert!(v["peak_roof_displacement_m"].as_f64().is_some_and(|x| x > 0.0 && x.is_finite()), "{order:?}: {v}");
     }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// A custom three-dimensional building given storey by storey: ten equal shear storeys, whose
+/// modes have the closed form ω_r = 2√(k/m)·sin((2r − 1)π/(2(2n + 1))) in each direction and in
+/// twist (with k_θ and I = m(B² + D²)/12); its storms run, with its dampers along x, from a
+/// random direction; a spec with both a preset and the building is refused by name.
+#[test]
+fn a_custom_three_dimensional_building_runs_from_its_spec() {
+    let (mass, kx, ky, kt, breadth, depth) = (1.0e6, 1.0e9, 2.0e9, 2.0e11, 30.0, 20.0);
+    let storeys: Vec<Value> = (1..=10)
+        .map(|j| {
+            serde_json::json!({
+                "elevation_m": 4.0 * j as f64, "mass_kg": mass, "stiffness_x_n_per_m": kx,
+                "stiffness_y_n_per_m": ky, "torsional_stiffness_n_m_per_rad": kt,
+                "plan": {"breadth_m": breadth, "depth_m": depth},
+            })
+        })
+        .collect();
+    let dampers: Vec<Value> = (1..=10)
+        .flat_map(|j| {
+            [10.0, -10.0].map(|y| {
+                serde_json::json!({"floor": j, "group": 1, "cos_angle": 0.8, "direction_deg": 0, "position_m": [0.0, y]})
+            })
+        })
+        .collect();
+    let spec = serde_json::json!({
+        "spatial_structure": {"storeys": storeys, "dampers": dampers},
+        "inputs": {"damper_c1": {"distribution": "uniform", "lower": 0.0, "upper": 5.0e5}},
+    });
+    let dir = std::env::temp_dir().join(format!("windmeta-custom-3d-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join("building.json");
+    std::fs::write(&path, spec.to_string()).unwrap();
+    let file = path.to_str().unwrap();
+    let v = json(&["modes", "--spec", file, "--modes", "3", "--json"]);
+    let w: Vec<f64> = v["frequencies_rad_s"].as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).collect();
+    let first = |k: f64, m: f64| 2.0 * (k / m).sqrt() * (std::f64::consts::PI / 42.0).sin();
+    let inertia = mass * (breadth * breadth + depth * depth) / 12.0;
+    let mut expected = [first(kx, mass), first(ky, mass), first(kt, inertia)];
+    expected.sort_by(f64::total_cmp);
+    for (w, e) in w.iter().zip(expected) {
+        assert!((w / e - 1.0).abs() < 1e-9, "{w} against {e}");
+    }
+    let peaks = json(&[
+        "sample-peaks",
+        "--spec",
+        file,
+        "--samples",
+        "2",
+        "--duration",
+        "20",
+        "--response",
+        "corner_acceleration",
+        "--json",
+    ]);
+    assert!(peaks["peaks"].as_array().unwrap().iter().all(|p| p.as_f64().unwrap() > 0.0), "{peaks}");
+    assert_eq!(peaks["preset"], "custom");
+    let both = serde_json::json!({"preset": "frame40-3d", "spatial_structure": {"storeys": storeys}});
+    std::fs::write(&path, both.to_string()).unwrap();
+    refused(&["modes", "--spec", file], "preset");
+    let plane = serde_json::json!({"spatial_structure": {"storeys": storeys}});
+    std::fs::write(&path, plane.to_string()).unwrap();
+    refused(&["calibrate", "--spec", file, "--out", dir.join("m.json").to_str().unwrap()], "spatial_structure");
     std::fs::remove_dir_all(&dir).ok();
 }

@@ -6,23 +6,12 @@ use crate::dynamics::{ModalMotion, SampleModel};
 use crate::error::{Error, Result};
 use crate::structure::Structure;
 use crate::wind::ModalForces;
+pub use crate::wind::rms_stride;
 use serde::{Deserialize, Serialize};
 use std::cell::OnceCell;
 
 /// Standard gravity (m/s²), for accelerations in milli-g.
 pub const STANDARD_GRAVITY: f64 = 9.806_65;
-
-/// The interval (s) at which an RMS acceleration samples the storm's acceleration. Every step's
-/// acceleration needs every damper's force (a power each), which at 100 Hz made a metamodel's RMS
-/// seventy times as costly as its peak; sampled at 10 Hz, nine samples a period of the highest
-/// retained mode (7 rad/s), the RMS of six reference histories moved by at most 1.6·10⁻⁴ every 8th
-/// step and 3.4·10⁻⁴ every 16th (docs/method.md). Reference and metamodel sample alike, so they are compared on one definition.
-pub const RMS_SAMPLING_INTERVAL_S: f64 = 0.1;
-
-/// Every how many steps of `time_step` (s) an RMS acceleration samples the storm.
-pub fn rms_stride(time_step: f64) -> usize {
-    ((RMS_SAMPLING_INTERVAL_S / time_step).round() as usize).max(1)
-}
 
 /// A response history of the building: of one floor, or for the dampers the envelope of a
 /// coefficient group (at every instant the largest magnitude among its dampers, so its peak is the

@@ -21,26 +21,33 @@ pub struct CornerAcceleration {
 /// The corner accelerations of a floor of plan `plan` whose centre of mass lies at `centre_of_mass`
 /// from the plan's centre, from the histories of its accelerations along x and y (m/s²) and in
 /// twist (rad/s²) at the centre of mass: a point at p from the centre of mass accelerates by
-/// (ẍ − θ̈ p_y, ÿ + θ̈ p_x). Empty histories give zeros.
+/// (ẍ − θ̈ p_y, ÿ + θ̈ p_x). The peak looks at every step, the RMS at every `rms_stride`-th from
+/// the first (as a floor's RMS acceleration samples the storm). Empty histories give zeros.
 pub fn corner_acceleration(
     plan: &FloorPlan,
     centre_of_mass: [f64; 2],
     x: &[f64],
     y: &[f64],
     rotation: &[f64],
+    rms_stride: usize,
 ) -> CornerAcceleration {
     let mut worst = CornerAcceleration { peak: 0.0, peak_corner: 0, rms: 0.0, rms_corner: 0 };
     let steps = x.len().min(y.len()).min(rotation.len());
+    let stride = rms_stride.max(1);
     for (k, corner) in plan.corners().iter().enumerate() {
         let (px, py) = (corner[0] - centre_of_mass[0], corner[1] - centre_of_mass[1]);
-        let (mut peak_square, mut sum_square) = (0.0f64, 0.0);
+        let (mut peak_square, mut sum_square, mut sampled) = (0.0f64, 0.0, 0usize);
         for t in 0..steps {
             let (ax, ay) = (x[t] - rotation[t] * py, y[t] + rotation[t] * px);
             let square = ax * ax + ay * ay;
             peak_square = peak_square.max(square);
-            sum_square += square;
+            if t % stride == 0 {
+                sum_square += square;
+                sampled += 1;
+            }
         }
-        let (peak, rms) = (peak_square.sqrt(), if steps > 0 { (sum_square / steps as f64).sqrt() } else { 0.0 });
+        let rms = if sampled > 0 { (sum_square / sampled as f64).sqrt() } else { 0.0 };
+        let peak = peak_square.sqrt();
         if peak > worst.peak {
             (worst.peak, worst.peak_corner) = (peak, k);
         }
@@ -49,6 +56,19 @@ pub fn corner_acceleration(
         }
     }
     worst
+}
+
+/// The resultant horizontal acceleration (m/s²) at corner `corner` (an index into
+/// [`FloorPlan::corners`]) step by step, from the same histories as [`corner_acceleration`].
+pub fn corner_history(
+    plan: &FloorPlan,
+    centre_of_mass: [f64; 2],
+    [x, y, rotation]: [&[f64]; 3],
+    corner: usize,
+) -> Vec<f64> {
+    let at = plan.corners()[corner.min(3)];
+    let (px, py) = (at[0] - centre_of_mass[0], at[1] - centre_of_mass[1]);
+    x.iter().zip(y).zip(rotation).map(|((ax, ay), r)| (ax - r * py).hypot(ay + r * px)).collect()
 }
 
 #[cfg(test)]
@@ -66,13 +86,13 @@ mod tests {
         // Centre of mass at the centre: every corner is 25 m away; |a| = 25·|θ̈|.
         let zero = vec![0.0; 2000];
         let twist = wave(0.002, 1.3);
-        let result = corner_acceleration(&PLAN, [0.0, 0.0], &zero, &zero, &twist);
+        let result = corner_acceleration(&PLAN, [0.0, 0.0], &zero, &zero, &twist, 1);
         let peak = twist.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let rms = (twist.iter().map(|v| v * v).sum::<f64>() / 2000.0).sqrt();
         assert!((result.peak - 25.0 * peak).abs() < 1e-12);
         assert!((result.rms - 25.0 * rms).abs() < 1e-12);
         // Off-centre mass: the farthest corner from it governs, (−15, −20) from (3, 4): 30 m.
-        let result = corner_acceleration(&PLAN, [3.0, 4.0], &zero, &zero, &twist);
+        let result = corner_acceleration(&PLAN, [3.0, 4.0], &zero, &zero, &twist, 1);
         assert_eq!(result.peak_corner, 2);
         assert!((result.peak - 30.0 * peak).abs() < 1e-12);
     }
@@ -85,7 +105,7 @@ mod tests {
         let x = wave(a, 0.9);
         let twist: Vec<f64> = x.iter().map(|v| -v / 20.0).collect();
         let zero = vec![0.0; 2000];
-        let result = corner_acceleration(&PLAN, [0.0, 0.0], &x, &zero, &twist);
+        let result = corner_acceleration(&PLAN, [0.0, 0.0], &x, &zero, &twist, 1);
         let peak = x.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let expected = peak * (4.0f64 + (15.0f64 / 20.0).powi(2)).sqrt();
         assert!([0, 1].contains(&result.peak_corner), "corner {}", result.peak_corner);

@@ -11,11 +11,13 @@
 
 mod assembly;
 mod corner;
+mod custom;
 mod frame40;
 mod modes;
 
 pub use assembly::{PlanarSystem, StoreyProperties, assemble, from_storeys};
-pub use corner::{CornerAcceleration, corner_acceleration};
+pub use corner::{CornerAcceleration, corner_acceleration, corner_history};
+pub use custom::{CustomPlan, CustomPlanDamper, CustomSpatialStructure, CustomStorey};
 pub use frame40::{FRAME40_3D_PLAN, frame40_3d};
 pub use modes::SpatialModes;
 
@@ -26,8 +28,10 @@ use faer::Mat;
 /// Degrees of freedom per floor: x, y, θ.
 pub const DOFS_PER_FLOOR: usize = 3;
 
-/// A direction of motion on a floor.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+/// A direction of motion on a floor, as requests name it: `x`, `y` or `rotation`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[cfg_attr(feature = "openapi", derive(utoipa::ToSchema))]
+#[serde(rename_all = "snake_case")]
 pub enum Dof {
     /// Sway along the plan's x axis (m).
     X = 0,
