@@ -30,7 +30,7 @@ enum Command {
     Modes(cli::ModesArgs),
     /// One storm through the reference model at the inputs' means (or fixed values).
     Simulate(cli::SimulateArgs),
-    /// Peak roof displacements of many storms through the reference model.
+    /// Peaks of a response over many storms through the reference model (plane or three-dimensional).
     SamplePeaks(cli::SamplePeaksArgs),
     /// Calibrate a PC-NARX metamodel on a Latin-hypercube design of reference storms.
     Calibrate(cli::CalibrateArgs),

@@ -4,7 +4,7 @@ use crate::analysis::{CertifyOptions, Response, ResponseKind, SpatialKind, Spati
 use crate::error::{Error, Result};
 use crate::structure::spatial::Dof;
 use crate::study::{Order, SPATIAL_PRESETS, SpatialStudy, Study, StudySpec, WIND_SPEED};
-use crate::uncertainty::{InputModel, parse_assignment};
+use crate::uncertainty::{InputModel, Marginal, parse_assignment};
 use crate::wind::aerodynamic::{Aerodynamics, TunnelData};
 use clap::Args;
 use std::collections::BTreeMap;
@@ -55,12 +55,13 @@ impl StudyArgs {
     /// The three-dimensional study of the preset, with the wake loads of the published model or of
     /// `--wind-tunnel`, the command line's overrides and fixed inputs applied.
     pub fn spatial_study(&self) -> Result<SpatialStudy> {
-        let mut study = SpatialStudy::from_spec(&self.spec()?, self.aerodynamics()?)?;
+        // Fixed before the building is made: an eccentricity moves its centres of mass.
+        let mut spec = self.spec()?;
         for assignment in &self.fix {
             let (name, value) = parse_assignment(assignment)?;
-            study.inputs = study.inputs.with_fixed(&name, value)?;
+            spec.inputs.insert(name, Marginal::Constant { value });
         }
-        Ok(study)
+        SpatialStudy::from_spec(&spec, self.aerodynamics()?)
     }
 
     /// The wake loads: the published model, or the wind-tunnel file's (its refusals name the file).

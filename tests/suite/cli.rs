@@ -60,7 +60,7 @@ fn modes_of_the_three_dimensional_preset_show_their_shares() {
     assert!(twist > 1e-3 && twist < 0.1, "the first mode's twist share {twist}");
     refused(&["modes", "--preset", "frame40-3d", "--fix", "eccentricity_y=9"], "inputs.eccentricity_y");
     refused(&["modes", "--preset", "frame40", "--fix", "eccentricity_y=1"], "eccentricity_y");
-    refused(&["exceedance", "--preset", "frame40-3d"], "three-dimensional");
+    refused(&["calibrate", "--preset", "frame40-3d", "--out", "/nonexistent/model.json"], "three-dimensional");
 }
 
 /// One storm from a direction on the three-dimensional preset: the square building turned by 90°
@@ -206,7 +206,7 @@ fn sample_peaks_runs_the_three_dimensional_preset() {
     .unwrap();
     refused(&["sample-peaks", "--spec", spec.to_str().unwrap(), "--samples", "2"], "inputs.eccentricity_y");
     std::fs::remove_dir_all(&spec_dir).ok();
-    let base = &base[..8];
+    let base = &base[..9];
     refused(&[base, &["--response", "acceleration"][..]].concat(), "direction");
     refused(&[base, &["--response", "damper_force", "--direction", "x"][..]].concat(), "response");
     refused(&["sample-peaks", "--preset", "frame40-kn", "--direction", "x"], "direction");
