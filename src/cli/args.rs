@@ -5,7 +5,7 @@ use crate::error::{Error, Result};
 use crate::structure::spatial::Dof;
 use crate::study::{Order, SPATIAL_PRESETS, SpatialStudy, Study, StudySpec, WIND_SPEED};
 use crate::uncertainty::{InputModel, Marginal, parse_assignment};
-use crate::wind::aerodynamic::{Aerodynamics, TunnelData};
+use crate::wind::aerodynamic::Aerodynamics;
 use clap::Args;
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -69,12 +69,12 @@ impl StudyArgs {
         let Some(path) = &self.wind_tunnel else { return Ok(Aerodynamics::Published) };
         let text = std::fs::read_to_string(path)
             .map_err(|e| Error::invalid("wind-tunnel", format!("cannot read {}: {e}", path.display())))?;
-        Ok(Aerodynamics::Tunnel(TunnelData::from_json(&text).map_err(|e| match e {
+        Aerodynamics::from_json(&text).map_err(|e| match e {
             Error::Invalid { field, reason } => {
                 Error::invalid(format!("wind-tunnel {}: {field}", path.display()), reason)
             }
             other => other,
-        })?))
+        })
     }
 
     /// Whether the study is a three-dimensional building: a preset, or a spec file with a

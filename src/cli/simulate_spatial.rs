@@ -7,6 +7,7 @@ use crate::error::{Error, Result};
 use crate::structure::spatial::Dof;
 use crate::study::{FloorPeaks, Order, SpatialRun, SpatialStudy};
 use crate::uncertainty::rng_from_seed;
+use crate::wind::aerodynamic::Aerodynamics;
 use serde_json::json;
 use std::time::Instant;
 
@@ -40,15 +41,21 @@ pub fn simulate_spatial(args: &SimulateArgs) -> Result<String> {
     let inputs: serde_json::Map<String, serde_json::Value> =
         study.inputs.names().zip(&x).map(|(n, v)| (n.to_string(), json!(v))).collect();
     let order_name = if args.full_order { "full" } else { "reduced" };
-    let tunnel = args.study.wind_tunnel.is_some();
-    let loads = if tunnel { "wind-tunnel data" } else { "the published model" };
+    let aerodynamics = study.wind.aerodynamics();
+    let loads = aerodynamics.map_or("the drag alone", Aerodynamics::describe);
+    // Records are taken at the direction measured nearest to the storm's.
+    let records_direction = match aerodynamics {
+        Some(Aerodynamics::Records(records)) => Some(records.nearest(run.direction)?.1),
+        _ => None,
+    };
     let corners = study.structure.plans[0].corners();
     if args.json {
         let column = |f: &dyn Fn(&FloorPeaks) -> f64| peaks.iter().map(f).collect::<Vec<f64>>();
         let value = json!({
             "preset": study.name,
             "order": order_name,
-            "wake_loads": if tunnel { "wind_tunnel" } else { "published" },
+            "wake_loads": aerodynamics.map_or("none", Aerodynamics::name),
+            "records_direction_deg": records_direction,
             "eccentricity_m": eccentricity,
             "seed": args.seed,
             "duration_s": study.storm.duration,
@@ -76,6 +83,9 @@ pub fn simulate_spatial(args: &SimulateArgs) -> Result<String> {
         "{} storm of {} s at Δt = {} s, {order_name}-order, wind towards {}° from x, wake loads from {loads}, seed {}\n",
         study.name, study.storm.duration, study.storm.time_step, run.direction, args.seed
     );
+    if let Some(measured) = records_direction {
+        out += &format!("  the records measured towards {measured}° (the nearest to the storm's direction)\n");
+    }
     for (name, value) in &inputs {
         out += &format!("  {name:<15} {value}\n");
     }

@@ -228,10 +228,13 @@ impl ImplicitDamperSolve {
     fn curvature_weights(&mut self, curvature: Curvature, floor: f64) {
         let alpha = self.exponent;
         let factor = if curvature == Curvature::Tangent { alpha } else { 1.0 };
-        for (d, w) in self.model.weights.iter_mut().enumerate() {
-            let magnitude = self.velocities[d].abs();
-            let slope = if magnitude > floor { self.powers[d] / magnitude } else { floor.powf(alpha - 1.0) };
-            *w = self.coefficients[d] * factor * slope;
+        // A select, not a branch, so that the pass vectorises.
+        let floor_slope = floor.powf(alpha - 1.0);
+        let weights = self.model.weights.iter_mut().zip(&self.coefficients);
+        for ((w, c), (v, p)) in weights.zip(self.velocities.iter().zip(&self.powers)) {
+            let magnitude = v.abs();
+            let slope = if magnitude > floor { p / magnitude.max(floor) } else { floor_slope };
+            *w = c * factor * slope;
         }
     }
 

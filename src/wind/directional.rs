@@ -7,7 +7,8 @@
 //! the drag acts along (cos β, sin β), the across-wind force along (−sin β, cos β), both at the
 //! plan's centre, and the torque about it. The two parts are independent processes (the
 //! buffeting drag and the wake are taken as uncorrelated, as the codes and force-balance studies
-//! take them).
+//! take them). The user's floor force records, when given, are the whole load instead: drag,
+//! across-wind force and torque as measured together.
 
 use super::aerodynamic::{Aerodynamics, WakeField, WakeGeometry};
 use super::{FloorForces, StormGrid, WindLoads, WindSite, simulate};
@@ -32,12 +33,29 @@ impl DirectionalWind {
     /// alone, as a plane study takes the wind).
     pub fn new(site: &WindSite, structure: &SpatialStructure, aerodynamics: Option<Aerodynamics>) -> Result<Self> {
         site.check()?;
+        if let Some(Aerodynamics::Records(records)) = &aerodynamics
+            && records.floors() != structure.floors()
+        {
+            return Err(Error::invalid(
+                "wind-tunnel",
+                format!(
+                    "the floor force records load {} floors, the building has {}",
+                    records.floors(),
+                    structure.floors()
+                ),
+            ));
+        }
         Ok(DirectionalWind {
             site: site.clone(),
             aerodynamics,
             heights: structure.floor_elevations.clone(),
             extents: structure.plans.iter().map(|p| [p.breadth, p.depth]).collect(),
         })
+    }
+
+    /// Where the loads beyond the drag come from (`None`: the drag alone).
+    pub fn aerodynamics(&self) -> Option<&Aerodynamics> {
+        self.aerodynamics.as_ref()
     }
 
     /// The drag's model for wind towards `direction_deg`: each floor's façade facing the wind is
@@ -85,6 +103,12 @@ impl DirectionalWind {
                 centres_of_mass.len(),
                 self.heights.len()
             )));
+        }
+        if let Some(Aerodynamics::Records(records)) = &self.aerodynamics {
+            WindLoads::check_speed(station_speed)?;
+            let roof_speed = self.site.mean_speed(self.heights[self.heights.len() - 1], station_speed);
+            let density = self.site.air_density_kg_m3;
+            return records.floor_forces(direction_deg, roof_speed, density, centres_of_mass, storm, rng);
         }
         let drag = self.drag(direction_deg)?.floor_forces(station_speed, storm, rng)?;
         let mut forces = drag.on_plan([cos, sin], centres_of_mass);

@@ -8,12 +8,14 @@
 //! by default from the published model of rectangular prisms ([`published`]), or from the user's
 //! wind-tunnel data ([`TunnelData`], format in `docs/wind-tunnel-data.md`). [`WakeField`] spreads
 //! them over the floors as one stationary process that [`super::simulate`] realises.
-//! Their means are taken as zero (a prism with the wind normal to a face; a measured mean lift or
-//! torque is not read).
+//! Their means are taken as zero (a prism with the wind normal to a face). The user's synchronous
+//! floor force records ([`FloorRecords`]) are the other way in: the whole load, drag and mean lift
+//! and torque included, scaled from the model to each storm.
 
 mod field;
 mod normalised;
 pub mod published;
+mod records;
 #[cfg(test)]
 mod tests;
 mod tunnel;
@@ -21,9 +23,14 @@ mod tunnel;
 pub use field::{WakeField, WakeGeometry};
 pub use normalised::{Coherence, NormalisedSpectrum, SpectrumTable};
 pub use published::{AcrossWindModel, TorsionModel};
+pub use records::{FloorRecords, RECORDS_FORMAT};
 pub use tunnel::TunnelData;
 
 use crate::error::{Error, Result};
+use serde::Deserialize;
+
+/// What a force-balance spectra file may say of itself in its `format` field.
+pub const SPECTRA_FORMAT: &str = "force_balance_spectra";
 
 /// The side ratios D/B the published model holds for.
 pub const PUBLISHED_SIDE_RATIOS: (f64, f64) = (0.2, 5.0);
@@ -78,11 +85,54 @@ impl WakeLoads {
 pub enum Aerodynamics {
     /// The published model, at the side ratio of the plan's face nearest normal to the wind.
     Published,
-    /// The user's wind-tunnel data.
+    /// The user's force-balance spectra.
     Tunnel(TunnelData),
+    /// The user's synchronous floor force records: the whole load, drag included.
+    Records(FloorRecords),
+}
+
+/// The `format` a wind-tunnel file names (force-balance spectra when it names none).
+#[derive(Deserialize)]
+struct FormatProbe {
+    #[serde(default)]
+    format: Option<String>,
 }
 
 impl Aerodynamics {
+    /// The wind-tunnel file's data, by the `format` it names: `force_balance_spectra` (the
+    /// default) or [`RECORDS_FORMAT`]. Errors name the field at fault.
+    pub fn from_json(text: &str) -> Result<Self> {
+        let probe: FormatProbe = serde_json::from_str(text)
+            .map_err(|e| Error::invalid("aerodynamics", format!("not a wind-tunnel data file: {e}")))?;
+        match probe.format.as_deref() {
+            None | Some(SPECTRA_FORMAT) => Ok(Aerodynamics::Tunnel(TunnelData::from_json(text)?)),
+            Some(RECORDS_FORMAT) => Ok(Aerodynamics::Records(FloorRecords::from_json(text)?)),
+            Some(other) => Err(Error::invalid(
+                "format",
+                format!("must be \"{SPECTRA_FORMAT}\" or \"{RECORDS_FORMAT}\", got \"{other}\""),
+            )),
+        }
+    }
+
+    /// How answers name the source of the loads: `published`, `wind_tunnel` (force-balance
+    /// spectra) or `floor_force_records`.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Aerodynamics::Published => "published",
+            Aerodynamics::Tunnel(_) => "wind_tunnel",
+            Aerodynamics::Records(_) => RECORDS_FORMAT,
+        }
+    }
+
+    /// The same for a sentence: "the published model", …
+    pub fn describe(&self) -> &'static str {
+        match self {
+            Aerodynamics::Published => "the published model",
+            Aerodynamics::Tunnel(_) => "wind-tunnel spectra",
+            Aerodynamics::Records(_) => "wind-tunnel floor force records",
+        }
+    }
+
     /// The wake loads for wind blowing towards `direction_deg` (counter-clockwise from the plan's
     /// x axis) on a plan of `breadth` along x and `depth` along y, and the breadth B facing the
     /// wind their coefficients and reduced frequencies are taken with.
@@ -95,6 +145,10 @@ impl Aerodynamics {
                 Ok((WakeLoads::published(along / facing)?, facing))
             }
             Aerodynamics::Tunnel(data) => Ok((data.at(direction_deg)?, data.reference_breadth_m)),
+            Aerodynamics::Records(_) => Err(Error::invalid(
+                "wind-tunnel",
+                "floor force records are the loads themselves; they give no spectra to simulate from",
+            )),
         }
     }
 }

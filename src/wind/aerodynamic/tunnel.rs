@@ -22,6 +22,10 @@ pub struct TunnelData {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct TunnelFile {
+    /// Checked by [`super::Aerodynamics::from_json`].
+    #[serde(default)]
+    #[allow(dead_code)]
+    format: Option<String>,
     reference_breadth_m: f64,
     #[serde(default)]
     vertical_coherence_decay: Option<f64>,
