@@ -233,7 +233,7 @@ impl ImplicitDamperSolve {
         let weights = self.model.weights.iter_mut().zip(&self.coefficients);
         for ((w, c), (v, p)) in weights.zip(self.velocities.iter().zip(&self.powers)) {
             let magnitude = v.abs();
-            let slope = if magnitude > floor { p / magnitude.max(floor) } else { floor_slope };
+            let slope = if magnitude > floor { p / magnitude } else { floor_slope };
             *w = c * factor * slope;
         }
     }

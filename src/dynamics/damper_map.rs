@@ -7,10 +7,11 @@
 //! three-dimensional building's 160 dampers on six modes made the row-by-row products, an index
 //! and a weight at a time, most of a reduced storm's cost.
 
-/// A dense Gram's multiply-adds run in independent vector chains ([`dots`]), some 0.15 cycles
-/// each, against about 2.5 for those of a rank-one change of the factor, whose square roots and
-/// divisions wait on one another: [`DamperMap::gram_cost`] counts them at this discount, in the
-/// rank-one changes' currency. Counted at par, a 900 s storm of `frame40-3d` made 10.5 rank-one
+/// A dense Gram's multiply-adds run in independent vector chains ([`dots`]), those of a rank-one
+/// change of the factor one after another behind its square roots and divisions, so
+/// [`DamperMap::gram_cost`] counts the Gram's at this discount, in the rank-one changes' currency
+/// (chosen by timing, not derived: an estimate of some 0.15 cycles against 2.5 a multiply-add, and
+/// the probe below). Counted at par, a 900 s storm of `frame40-3d` made 10.5 rank-one
 /// changes and 0.09 factorisations per step (530 and 498 ms); at this discount 0.2 and 0.43 (447
 /// and 443 ms).
 const DENSE_GRAM_DISCOUNT: usize = 16;
@@ -97,18 +98,7 @@ impl DamperMap {
             DamperMap::Dense { dampers, columns } => {
                 // Gᵀ f was a twelfth of a three-dimensional storm as one dot product per column.
                 let column = |i: usize| &columns[i * dampers..(i + 1) * dampers];
-                each_in_groups(0, out.len(), |group| match *group {
-                    [i, j, k, l] => {
-                        let sums = dots([column(i), column(j), column(k), column(l)], forces);
-                        [i, j, k, l].iter().zip(sums).for_each(|(&m, x)| out[m] += x);
-                    }
-                    [i, j] => {
-                        let sums = dots([column(i), column(j)], forces);
-                        [i, j].iter().zip(sums).for_each(|(&m, x)| out[m] += x);
-                    }
-                    [i] => out[i] += dots([column(i)], forces)[0],
-                    _ => unreachable!("groups of four, two or one"),
-                });
+                each_dot(column, 0..out.len(), forces, |m, x| out[m] += x);
             }
         }
     }
@@ -132,24 +122,11 @@ impl DamperMap {
                 let column = |i: usize| &columns[i * dampers..(i + 1) * dampers];
                 for i in 0..n {
                     scratch.iter_mut().zip(column(i)).zip(weights).for_each(|((s, g), w)| *s = w * g);
-                    let weighted: &[f64] = scratch;
-                    let mut add = |j: usize, entry: f64| {
+                    each_dot(column, i..n, scratch, |j, entry| {
                         matrix[i * n + j] += entry;
                         if j != i {
                             matrix[j * n + i] += entry;
                         }
-                    };
-                    each_in_groups(i, n, |group| match *group {
-                        [a, b, c, d] => {
-                            let sums = dots([column(a), column(b), column(c), column(d)], weighted);
-                            [a, b, c, d].into_iter().zip(sums).for_each(|(j, x)| add(j, x));
-                        }
-                        [a, b] => {
-                            let sums = dots([column(a), column(b)], weighted);
-                            [a, b].into_iter().zip(sums).for_each(|(j, x)| add(j, x));
-                        }
-                        [a] => add(a, dots([column(a)], weighted)[0]),
-                        _ => unreachable!("groups of four, two or one"),
                     });
                 }
             }
@@ -197,20 +174,28 @@ fn dots<const K: usize>(columns: [&[f64]; K], f: &[f64]) -> [f64; K] {
     })
 }
 
-/// Calls `each` with the indices `start..end` in groups of four, then of two, then one.
+/// Calls `each(j, column(j)·f)` for every j of `range`, the dot products four at a time, then two,
+/// then one ([`dots`]).
 #[inline]
-fn each_in_groups(start: usize, end: usize, mut each: impl FnMut(&[usize])) {
-    let mut i = start;
+fn each_dot<'a>(
+    column: impl Fn(usize) -> &'a [f64],
+    range: std::ops::Range<usize>,
+    f: &[f64],
+    mut each: impl FnMut(usize, f64),
+) {
+    let (mut i, end) = (range.start, range.end);
     while end - i >= 4 {
-        each(&[i, i + 1, i + 2, i + 3]);
+        let sums = dots([column(i), column(i + 1), column(i + 2), column(i + 3)], f);
+        sums.into_iter().enumerate().for_each(|(k, x)| each(i + k, x));
         i += 4;
     }
     while end - i >= 2 {
-        each(&[i, i + 1]);
+        let sums = dots([column(i), column(i + 1)], f);
+        sums.into_iter().enumerate().for_each(|(k, x)| each(i + k, x));
         i += 2;
     }
     if i < end {
-        each(&[i]);
+        each(i, dots([column(i)], f)[0]);
     }
 }
 

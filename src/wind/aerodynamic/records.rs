@@ -203,6 +203,19 @@ impl FloorRecords {
         storm: &StormGrid,
     ) -> Result<FloorForces> {
         let (index, _) = self.nearest(direction_deg)?;
+        self.window_of(index, roof_speed, air_density, start_s, centres_of_mass, storm)
+    }
+
+    /// [`Self::window`] of the records of the measured direction `index`.
+    fn window_of(
+        &self,
+        index: usize,
+        roof_speed: f64,
+        air_density: f64,
+        start_s: f64,
+        centres_of_mass: &[[f64; 2]],
+        storm: &StormGrid,
+    ) -> Result<FloorForces> {
         self.check_storm(index, roof_speed, start_s, storm)?;
         if centres_of_mass.len() != self.floors() {
             return Err(Error::Internal(format!(
@@ -259,7 +272,7 @@ impl FloorRecords {
         self.check_storm(index, roof_speed, 0.0, storm)?;
         let slack = self.duration_s(roof_speed) - storm.duration;
         let start = rng.random::<f64>() * slack;
-        self.window(direction_deg, roof_speed, air_density, start, centres_of_mass, storm)
+        self.window_of(index, roof_speed, air_density, start, centres_of_mass, storm)
     }
 
     /// The storm fits in the record from `start_s` at this roof speed.
